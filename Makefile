@@ -1,0 +1,53 @@
+# Hubwire top-level build. `make test` runs every check; `make demo` shows the hub discovering a
+# simulated Uno running examples/Rover. Both install what they need first (tools/setup.sh).
+SHELL := /bin/bash
+BUILD := build
+PY := .venv/bin/python
+JOBS ?= 2
+
+.PHONY: all setup test test-cpp test-examples test-arm test-manifests test-python emulator simuno uno-firmware demo clean
+
+all: emulator simuno
+
+setup:
+	@bash tools/setup.sh
+
+$(BUILD)/cmake/Makefile: CMakeLists.txt
+	cmake -S . -B $(BUILD)/cmake -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+
+cpp: $(BUILD)/cmake/Makefile
+	cmake --build $(BUILD)/cmake -j$(JOBS)
+
+emulator: cpp
+
+simuno:
+	$(MAKE) -C tools/simuno BUILD_DIR=$(CURDIR)/$(BUILD)/simuno
+
+# Rover for the Uno, as the simulated-Uno tests and the demo run it.
+uno-firmware:
+	bash tools/arduino/build-sketch.sh examples/Rover arduino:avr:uno $(BUILD)/uno/Rover >/dev/null
+
+test: setup
+	$(MAKE) test-cpp test-examples test-arm test-manifests test-python
+	@echo "make test: all checks passed"
+
+test-cpp: cpp
+	cd $(BUILD)/cmake && ctest --output-on-failure
+
+test-examples:
+	bash tools/arduino/build-all.sh
+
+test-arm:
+	bash tools/arm-check/check-arm.sh
+
+test-manifests:
+	$(PY) tools/check_manifests.py
+
+test-python: emulator simuno uno-firmware
+	$(PY) -m pytest host/tests -q
+
+demo: setup emulator simuno uno-firmware
+	bash tools/demo.sh
+
+clean:
+	rm -rf $(BUILD)

@@ -1,0 +1,48 @@
+// Minimal: the smallest useful Hubwire sketch.
+//
+// It offers the hub three channels:
+//   blink_ms  a value the hub can read and change (how fast the LED blinks)
+//   led       a control: the hub switches the LED blinking on or off
+//   button    an event: the hub hears about every press of a button on pin 2, exactly once
+//
+// Upload it, then on the hub:  hubwire info /dev/ttyACM0
+//                              hubwire set /dev/ttyACM0 blink_ms 100
+#include <Hubwire.h>
+
+Hubwire hub(Serial);
+
+uint16_t blinkMs = 500;         // the hub may set 50..5000 ms
+bool blinking = true;           // changed through the "led" control
+hubwire::Event<uint8_t> button; // carries how many presses so far
+
+void setBlinking(bool on) { blinking = on; }
+
+// Hubwire calls this whenever it needs to know the channels: keep it to declarations.
+void channels() {
+  hub.expose(F("blink_ms"), blinkMs).writable().range(50, 5000).unit(F("ms"));
+  hub.control(F("led"), setBlinking);
+  hub.event(F("button"), button);
+}
+
+void setup() {
+  Serial.begin(115200);
+  pinMode(LED_BUILTIN, OUTPUT);
+  pinMode(2, INPUT_PULLUP);
+  hub.begin(F("minimal"), channels);
+}
+
+void loop() {
+  hub.update();  // answers the hub; never blocks
+
+  static uint32_t toggledAt;
+  if (millis() - toggledAt >= blinkMs) {
+    toggledAt = millis();
+    digitalWrite(LED_BUILTIN, blinking && !digitalRead(LED_BUILTIN));
+  }
+
+  static bool wasPressed;
+  static uint8_t presses;
+  bool pressed = digitalRead(2) == LOW;
+  if (pressed && !wasPressed) hub.emit(button, ++presses);  // queued and retried until the hub acks
+  wasPressed = pressed;
+}

@@ -1,0 +1,110 @@
+// Rover: a small robot with two motors, an IMU, range sensors, a bumper, an LED and a buzzer,
+// steered from a Raspberry Pi (or any hub) over USB serial.
+//
+// What it shows:
+//   - writable values with ranges and units, and a failsafe: if the hub goes silent, both motors
+//     are set to 0 before onLinkLost() runs (the hub sees "failsafes" count up);
+//   - a struct channel (imu) with named fields, a fixed array (range), a bounded string (name);
+//   - streamable sensors: the hub subscribes, e.g. `hubwire watch /dev/ttyACM0`;
+//   - an event (bumper) delivered exactly once, and callable actions with an argument and a result.
+//
+// The sensors here are stand-ins computed from the motor speeds, so the sketch runs on a bare
+// board (and in the simulator); replace readSensors() with your IMU and sonar libraries.
+#include <Hubwire.h>
+
+Hubwire hub(Serial);
+
+const uint8_t kLeftMotorPin = 5, kRightMotorPin = 6, kBumperPin = 2, kBuzzerPin = 8;
+
+float left, right;  // motor speeds in m/s, -1..1
+
+struct Imu {
+  float ax, ay, az;  // m/s^2
+  int16_t gyro[3];   // deg/s
+} imu;
+
+uint16_t rangeCm[4];     // front, right, back, left
+uint16_t batteryMv = 7400;
+bool led;
+char name[17] = "rover";  // up to 16 characters
+
+hubwire::Event<bool> bumper;  // true when pressed, false when released
+
+uint16_t failsafes;  // how often the hub went silent
+uint32_t applied;    // writes applied from the hub (each exactly once)
+
+void countWrite() { ++applied; }
+
+void ledChanged() {
+  digitalWrite(LED_BUILTIN, led ? HIGH : LOW);
+  ++applied;
+}
+
+// Callable actions: the hub passes an argument and gets the return value back.
+bool beep(uint16_t ms) {
+  if (ms > 2000) return false;  // refuse long beeps
+  tone(kBuzzerPin, 880, ms);
+  return true;
+}
+
+// Queues `count` bumper events (pressed, released, ...) to test the event path from the hub.
+uint8_t selftest(uint8_t count) {
+  uint8_t queued = 0;
+  for (uint8_t i = 0; i < count; ++i)
+    if (hub.emit(bumper, i % 2 == 0)) ++queued;
+  return queued;
+}
+
+void stopMotors() {
+  ++failsafes;  // left and right are already 0: their failsafe values were applied first
+  analogWrite(kLeftMotorPin, 0);
+  analogWrite(kRightMotorPin, 0);
+}
+
+void channels() {
+  hub.expose(F("left"), left).writable().streamable().range(-1, 1).unit(F("m/s")).failsafe(0).onChange(countWrite);
+  hub.expose(F("right"), right).writable().streamable().range(-1, 1).unit(F("m/s")).failsafe(0).onChange(countWrite);
+  hub.expose(F("imu"), imu, F("ax:f32,ay:f32,az:f32,gyro:i16[3]")).streamable().describe(F("accel m/s2, gyro deg/s"));
+  hub.expose(F("range"), rangeCm).streamable().unit(F("cm"));
+  hub.expose(F("battery"), batteryMv).streamable().unit(F("mV"));
+  hub.expose(F("led"), led).writable().onChange(ledChanged);
+  hub.expose(F("name"), name).writable().onChange(countWrite);
+  hub.event(F("bumper"), bumper);
+  hub.action(F("beep"), beep).describe(F("beep for ms (max 2000)"));
+  hub.action(F("selftest"), selftest).describe(F("emit n bumper events"));
+  hub.expose(F("failsafes"), failsafes);
+  hub.expose(F("applied"), applied);
+}
+
+void readSensors() {
+  static uint32_t at;
+  if (millis() - at < 20) return;
+  at = millis();
+  float turn = left - right, drive = (left + right) / 2;
+  imu.ax = drive * 0.5f;
+  imu.ay = turn * 0.2f;
+  imu.az = 9.81f;
+  imu.gyro[2] = (int16_t)(turn * 90);
+  for (uint8_t i = 0; i < 4; ++i) rangeCm[i] = (uint16_t)(100 + 50 * i + (at / 100 + i * 7) % 20);
+  batteryMv = (uint16_t)(7400 - (at / 1000) % 200);
+}
+
+void setup() {
+  Serial.begin(115200);
+  pinMode(LED_BUILTIN, OUTPUT);
+  pinMode(kBumperPin, INPUT_PULLUP);
+  hub.onLinkLost(stopMotors);
+  hub.begin(F("rover"), channels, F("1.0.0"));
+}
+
+void loop() {
+  hub.update();
+  readSensors();
+
+  analogWrite(kLeftMotorPin, (uint8_t)(fabs(left) * 255));
+  analogWrite(kRightMotorPin, (uint8_t)(fabs(right) * 255));
+
+  static bool wasPressed;
+  bool pressed = digitalRead(kBumperPin) == LOW;
+  if (pressed != wasPressed && hub.emit(bumper, pressed)) wasPressed = pressed;
+}

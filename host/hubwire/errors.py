@@ -1,0 +1,68 @@
+"""Exceptions raised by hubwire. Every one derives from :class:`HubwireError`."""
+from __future__ import annotations
+
+from typing import Optional
+
+
+class HubwireError(Exception):
+    """Base class of every error hubwire raises on purpose."""
+
+
+class Timeout(HubwireError, TimeoutError):
+    """The device did not answer in time (after all retries)."""
+
+
+class LinkLost(HubwireError, ConnectionError):
+    """The link to the device is down; calls fail fast until it is restored."""
+
+
+class ProtocolVersionError(HubwireError):
+    """The device speaks a protocol version this hub does not."""
+
+    def __init__(self, device_version: int, hub_version: int) -> None:
+        super().__init__(
+            f"device speaks Hubwire protocol version {device_version}, this hub speaks version "
+            f"{hub_version}; update the {'hub (pip install -U hubwire)' if device_version > hub_version else 'Hubwire library on the board'}"
+        )
+        self.device_version = device_version
+        self.hub_version = hub_version
+
+
+class NoDeviceFound(HubwireError):
+    """No serial port (or more than one) matched a known microcontroller USB id."""
+
+
+class DescriptorError(HubwireError, ValueError):
+    """The device's descriptor is not valid JSON or does not match the descriptor schema."""
+
+
+class InvalidValue(HubwireError, ValueError):
+    """A value does not fit a channel's type (encoding) or a payload does not decode.
+
+    ``code`` is the :class:`hubwire.wire.messages.NakCode` a device would answer with
+    (``BAD_LENGTH``, ``BAD_VALUE`` or ``OUT_OF_RANGE``).
+    """
+
+    def __init__(self, message: str, code: "int") -> None:
+        super().__init__(message)
+        self.code = code
+
+    @property
+    def error(self) -> str:
+        """Name of :attr:`code` (``"BAD_VALUE"``, ...)."""
+        from .wire.messages import nak_name
+
+        return nak_name(self.code)
+
+
+class NakError(HubwireError):
+    """The device refused a request with a NAK; ``code`` and ``error`` (its name) tell why."""
+
+    def __init__(self, code: int, channel: Optional[str] = None, what: str = "") -> None:
+        from .wire.messages import nak_name
+
+        self.code = code
+        self.error = nak_name(code)
+        self.channel = channel
+        where = f" for channel {channel!r}" if channel else ""
+        super().__init__(f"device answered NAK {self.error} ({code}){where}{': ' + what if what else ''}")

@@ -1,0 +1,492 @@
+"""Typed values on the wire (PROTOCOL.md §6), built at runtime from a descriptor type object.
+
+A *type object* is the part of a descriptor that names a type: ``{"t": "f32"}``,
+``{"t": "u16", "c": 3}`` (fixed array), ``{"t": "str", "c": 16}`` (bounded string),
+``{"t": "struct", "f": [{"n": "ax", "t": "f32"}, {"n": "gyro", "t": "i16", "c": 3}]}`` or
+``{"t": "void"}``. :func:`codec_for` turns it into a :class:`Codec` that encodes Python values to
+payload bytes and decodes payloads back:
+
+- scalars: ``bool``, ``int`` (u8..u32, i8..i32) and ``float`` (f32, f64);
+- fixed arrays: tuples;
+- structs: instances of a tuple subclass built at runtime with one attribute per field;
+- bounded strings: ``str``; void: ``None``.
+
+Encoding errors and decoding errors raise :class:`hubwire.errors.InvalidValue` whose ``code`` is the
+NAK code a device would answer (``BAD_LENGTH``, ``BAD_VALUE``, ``OUT_OF_RANGE``).
+"""
+from __future__ import annotations
+
+import json
+import math
+import struct
+from operator import itemgetter
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
+
+from ..errors import InvalidValue
+from .messages import NakCode
+
+__all__ = ["SCALARS", "Codec", "StructValue", "codec_for", "type_name"]
+
+BAD_LENGTH = NakCode.BAD_LENGTH
+BAD_VALUE = NakCode.BAD_VALUE
+OUT_OF_RANGE = NakCode.OUT_OF_RANGE
+
+F32_MAX = 3.4028234663852886e38
+
+# name -> (struct format char, size, lo, hi) ; lo/hi None for floats and bool
+SCALARS: Dict[str, Tuple[str, int, Optional[int], Optional[int]]] = {
+    "bool": ("B", 1, 0, 1),
+    "u8": ("B", 1, 0, 0xFF),
+    "u16": ("H", 2, 0, 0xFFFF),
+    "u32": ("I", 4, 0, 0xFFFFFFFF),
+    "i8": ("b", 1, -0x80, 0x7F),
+    "i16": ("h", 2, -0x8000, 0x7FFF),
+    "i32": ("i", 4, -0x80000000, 0x7FFFFFFF),
+    "f32": ("f", 4, None, None),
+    "f64": ("d", 8, None, None),
+}
+INTEGER_TYPES = frozenset(("u8", "u16", "u32", "i8", "i16", "i32"))
+FLOAT_TYPES = frozenset(("f32", "f64"))
+NUMERIC_TYPES = INTEGER_TYPES | FLOAT_TYPES
+
+
+def _describe(value: Any) -> str:
+    r = repr(value)
+    if len(r) > 40:
+        r = r[:37] + "..."
+    return f"{r} ({type(value).__name__})"
+
+
+def _scalar_checker(t: str, where: str) -> Callable[[Any], Any]:
+    """Return a function normalising one Python value for scalar type ``t`` or raising InvalidValue."""
+    if t == "bool":
+        def check_bool(v: Any) -> bool:
+            if v is True or v is False:
+                return v
+            if isinstance(v, int) and v in (0, 1):
+                return bool(v)
+            raise InvalidValue(f"{where}: expected a bool, got {_describe(v)}", BAD_VALUE)
+        return check_bool
+    if t in INTEGER_TYPES:
+        lo, hi = SCALARS[t][2], SCALARS[t][3]
+
+        def check_int(v: Any) -> int:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                if hasattr(v, "__index__") and not isinstance(v, bool):
+                    v = v.__index__()
+                else:
+                    raise InvalidValue(f"{where}: expected an integer for {t}, got {_describe(v)}", BAD_VALUE)
+            if isinstance(v, float):
+                if not v.is_integer():
+                    raise InvalidValue(f"{where}: expected an integer for {t}, got {_describe(v)}", BAD_VALUE)
+                v = int(v)
+            if not lo <= v <= hi:  # type: ignore[operator]
+                raise InvalidValue(f"{where}: {v} is outside the {t} range {lo}..{hi}", OUT_OF_RANGE)
+            return v
+        return check_int
+    if t in FLOAT_TYPES:
+        is32 = t == "f32"
+
+        def check_float(v: Any) -> float:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                try:
+                    v = float(v.__float__())  # numpy scalars, Decimal, Fraction
+                except (AttributeError, TypeError, ValueError, OverflowError):
+                    raise InvalidValue(f"{where}: expected a number for {t}, got {_describe(v)}", BAD_VALUE) from None
+            try:
+                f = float(v)
+            except OverflowError:
+                raise InvalidValue(f"{where}: {v} is too large for {t}", OUT_OF_RANGE) from None
+            if is32 and math.isfinite(f) and abs(f) > F32_MAX:
+                # values that round to FLT_MAX are fine, anything beyond overflows f32
+                try:
+                    struct.pack("<f", f)
+                except OverflowError:
+                    raise InvalidValue(f"{where}: {v} is too large for f32", OUT_OF_RANGE) from None
+            return f
+        return check_float
+    raise ValueError(f"unknown scalar type {t!r}")
+
+
+class StructValue(tuple):
+    """Base of the struct value classes built at runtime: a tuple with named fields.
+
+    ``value.ax``, ``value[0]``, ``value._asdict()``, ``value._replace(ax=1.0)``; fields whose name is a
+    Python keyword are reached with ``getattr(value, "from")`` or ``value["from"]``.
+    """
+
+    __slots__ = ()
+    _fields: Tuple[str, ...] = ()
+
+    def __new__(cls, *args: Any, **kwargs: Any) -> "StructValue":
+        if kwargs:
+            values = list(args) + [None] * (len(cls._fields) - len(args))
+            for k, v in kwargs.items():
+                if k not in cls._fields:
+                    raise TypeError(f"{cls.__name__} has no field {k!r}")
+                values[cls._fields.index(k)] = v
+            args = tuple(values)
+        if len(args) != len(cls._fields):
+            raise TypeError(f"{cls.__name__} takes {len(cls._fields)} values ({', '.join(cls._fields)}), got {len(args)}")
+        return tuple.__new__(cls, args)
+
+    def __getitem__(self, key: Any) -> Any:  # type: ignore[override]
+        if isinstance(key, str):
+            try:
+                return tuple.__getitem__(self, self._fields.index(key))
+            except ValueError:
+                raise KeyError(key) from None
+        return tuple.__getitem__(self, key)
+
+    def _asdict(self) -> Dict[str, Any]:
+        return dict(zip(self._fields, self))
+
+    def _replace(self, **kwargs: Any) -> "StructValue":
+        d = self._asdict()
+        for k in kwargs:
+            if k not in d:
+                raise TypeError(f"{type(self).__name__} has no field {k!r}")
+        d.update(kwargs)
+        return tuple.__new__(type(self), tuple(d[f] for f in self._fields))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({', '.join(f'{k}={v!r}' for k, v in zip(self._fields, self))})"
+
+    def __getnewargs__(self) -> Tuple[Any, ...]:
+        return tuple(self)
+
+
+def make_struct_class(name: str, fields: Sequence[str]) -> type:
+    """Build a :class:`StructValue` subclass called ``name`` with the given field names."""
+    ns: Dict[str, Any] = {"__slots__": (), "_fields": tuple(fields)}
+    for i, f in enumerate(fields):
+        if f not in ns and not f.startswith("__"):
+            ns[f] = property(itemgetter(i), doc=f"field {f}")
+    return type(name, (StructValue,), ns)
+
+
+def type_name(obj: Mapping[str, Any]) -> str:
+    """Human-readable name of a type object: ``f32``, ``u16[3]``, ``str[16]``, ``struct{ax: f32}``."""
+    t = obj.get("t")
+    if t == "struct":
+        return "struct{" + ", ".join(f"{f['n']}: {type_name(f)}" for f in obj.get("f", ())) + "}"
+    if "c" in obj:
+        return f"{t}[{obj['c']}]"
+    return str(t)
+
+
+class Codec:
+    """Encoder/decoder for one type; build with :func:`codec_for`.
+
+    Attributes: ``name`` (readable type name), ``kind`` (``scalar``, ``array``, ``struct``, ``str``,
+    ``void``), ``scalar`` (element type name, or None), ``size`` (payload size, None for strings:
+    their size varies), ``type_obj`` (the descriptor type object).
+    """
+
+    kind = ""
+
+    def __init__(self, type_obj: Mapping[str, Any]) -> None:
+        self.type_obj = dict(type_obj)
+        self.name = type_name(type_obj)
+        self.scalar: Optional[str] = None
+        self.size: Optional[int] = 0
+        self.max_size = 0
+
+    # subclasses override
+    def encode(self, value: Any) -> bytes:
+        """Encode ``value`` to payload bytes; raise InvalidValue if it does not fit the type."""
+        raise NotImplementedError
+
+    def decode(self, payload: bytes) -> Any:
+        """Decode payload bytes; raise InvalidValue(BAD_LENGTH / BAD_VALUE) if malformed."""
+        raise NotImplementedError
+
+    def check(self, value: Any) -> Any:
+        """Normalise ``value`` (lists become tuples, dicts become structs) or raise InvalidValue."""
+        return self.decode(self.encode(value)) if self.kind != "scalar" else self._check(value)  # type: ignore[attr-defined]
+
+    def from_json(self, obj: Any) -> Any:
+        """Python value from its JSON form (lists for arrays, objects for structs)."""
+        return obj
+
+    def to_json(self, value: Any) -> Any:
+        """JSON form of a decoded value."""
+        return value
+
+    def parse_text(self, text: str) -> Any:
+        """Parse a command-line argument into a value of this type."""
+        try:
+            return self.from_json(json.loads(text))
+        except ValueError:
+            raise InvalidValue(f"cannot parse {text!r} as {self.name} (give JSON)", BAD_VALUE) from None
+
+    def __repr__(self) -> str:
+        return f"<Codec {self.name}>"
+
+
+def _bad_length(name: str, want: Any, got: int) -> InvalidValue:
+    return InvalidValue(f"{name} payload must be {want} bytes, got {got}", BAD_LENGTH)
+
+
+class ScalarCodec(Codec):
+    kind = "scalar"
+
+    def __init__(self, type_obj: Mapping[str, Any], where: str = "value") -> None:
+        super().__init__(type_obj)
+        t = type_obj["t"]
+        fmt, size, _, _ = SCALARS[t]
+        self.scalar = t
+        self.size = self.max_size = size
+        self._s = struct.Struct("<" + fmt)
+        self._check = _scalar_checker(t, where)
+        self._is_bool = t == "bool"
+
+    def encode(self, value: Any) -> bytes:
+        return self._s.pack(self._check(value))
+
+    def decode(self, payload: bytes) -> Any:
+        if len(payload) != self.size:
+            raise _bad_length(self.name, self.size, len(payload))
+        v = self._s.unpack(payload)[0]
+        if self._is_bool:
+            if v > 1:
+                raise InvalidValue(f"bool byte must be 0 or 1, got {v}", BAD_VALUE)
+            return v == 1
+        return v
+
+    def parse_text(self, text: str) -> Any:
+        s = text.strip()
+        if self._is_bool:
+            low = s.lower()
+            if low in ("1", "true", "on", "yes"):
+                return True
+            if low in ("0", "false", "off", "no"):
+                return False
+            raise InvalidValue(f"cannot parse {text!r} as bool (true/false/1/0/on/off)", BAD_VALUE)
+        try:
+            v: Any = int(s, 0) if self.scalar in INTEGER_TYPES else float(s)
+        except ValueError:
+            raise InvalidValue(f"cannot parse {text!r} as {self.name}", BAD_VALUE) from None
+        return self._check(v)
+
+
+class _Flat(Codec):
+    """Shared machinery of arrays and structs: one precompiled struct of scalars."""
+
+    def _setup(self, layout: List[Tuple[str, str, Optional[int]]], where: str) -> None:
+        # layout: (field name, scalar type, count or None)
+        fmt = "<"
+        self._checks: List[Tuple[int, Optional[int], Callable[[Any], Any]]] = []
+        self._bool_slots: List[int] = []
+        pos = 0
+        size = 0
+        for fname, t, count in layout:
+            f, s, _, _ = SCALARS[t]
+            n = 1 if count is None else count
+            fmt += f"{n}{f}"
+            size += s * n
+            label = where if not fname else f"{where}.{fname}"
+            self._checks.append((pos, count, _scalar_checker(t, label)))
+            if t == "bool":
+                self._bool_slots.extend(range(pos, pos + n))
+            pos += n
+        self._s = struct.Struct(fmt)
+        self.size = self.max_size = size
+        self._nvalues = pos
+
+    def _decode_flat(self, payload: bytes) -> Tuple[Any, ...]:
+        if len(payload) != self.size:
+            raise _bad_length(self.name, self.size, len(payload))
+        vals = self._s.unpack(payload)
+        if self._bool_slots:
+            lst = list(vals)
+            for i in self._bool_slots:
+                if lst[i] > 1:
+                    raise InvalidValue(f"bool byte must be 0 or 1, got {lst[i]}", BAD_VALUE)
+                lst[i] = lst[i] == 1
+            vals = tuple(lst)
+        return vals
+
+
+class ArrayCodec(_Flat):
+    kind = "array"
+
+    def __init__(self, type_obj: Mapping[str, Any], where: str = "value") -> None:
+        super().__init__(type_obj)
+        self.scalar = type_obj["t"]
+        self.count = int(type_obj["c"])
+        self._setup([("", self.scalar, self.count)], where)
+        self._elem = self._checks[0][2]
+        self._where = where
+
+    def _check_seq(self, value: Any) -> List[Any]:
+        if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or not hasattr(value, "__iter__"):
+            if isinstance(value, (bytes, bytearray)) and self.scalar == "u8":
+                pass
+            else:
+                raise InvalidValue(f"{self._where}: expected a sequence of {self.count} {self.scalar}, got {_describe(value)}", BAD_VALUE)
+        if len(value) != self.count:
+            raise InvalidValue(f"{self._where}: expected {self.count} elements for {self.name}, got {len(value)}", BAD_LENGTH)
+        return [self._elem(v) for v in value]
+
+    def encode(self, value: Any) -> bytes:
+        return self._s.pack(*self._check_seq(value))
+
+    def decode(self, payload: bytes) -> Tuple[Any, ...]:
+        return self._decode_flat(payload)
+
+    def check(self, value: Any) -> Tuple[Any, ...]:
+        return tuple(self._check_seq(value))
+
+    def from_json(self, obj: Any) -> Any:
+        return tuple(obj) if isinstance(obj, list) else obj
+
+    def to_json(self, value: Any) -> Any:
+        return list(value)
+
+
+class StructCodec(_Flat):
+    kind = "struct"
+
+    def __init__(self, type_obj: Mapping[str, Any], where: str = "value", class_name: str = "Struct") -> None:
+        super().__init__(type_obj)
+        fields = type_obj["f"]
+        self.fields = [f["n"] for f in fields]
+        self.field_codecs = [codec_for(f, where=f"{where}.{f['n']}") for f in fields]
+        self.value_class = make_struct_class(class_name, self.fields)
+        self._setup([(f["n"], f["t"], f.get("c")) for f in fields], where)
+        self._where = where
+
+    def _flatten(self, value: Any) -> List[Any]:
+        if isinstance(value, Mapping):
+            missing = [f for f in self.fields if f not in value]
+            extra = [k for k in value if k not in self.fields]
+            if missing or extra:
+                raise InvalidValue(
+                    f"{self._where}: struct fields are {', '.join(self.fields)}"
+                    + (f"; missing {', '.join(missing)}" if missing else "")
+                    + (f"; unknown {', '.join(map(str, extra))}" if extra else ""), BAD_VALUE)
+            items = [value[f] for f in self.fields]
+        elif isinstance(value, (tuple, list)):
+            if len(value) != len(self.fields):
+                raise InvalidValue(f"{self._where}: expected {len(self.fields)} fields ({', '.join(self.fields)}), got {len(value)}", BAD_LENGTH)
+            items = list(value)
+        else:
+            raise InvalidValue(f"{self._where}: expected a struct (dict or tuple of {', '.join(self.fields)}), got {_describe(value)}", BAD_VALUE)
+        flat: List[Any] = []
+        for (pos, count, chk), item, fc in zip(self._checks, items, self.field_codecs):
+            if count is None:
+                flat.append(chk(item))
+            else:
+                flat.extend(fc._check_seq(item))  # type: ignore[attr-defined]
+        return flat
+
+    def encode(self, value: Any) -> bytes:
+        return self._s.pack(*self._flatten(value))
+
+    def _build(self, vals: Sequence[Any]) -> StructValue:
+        out = []
+        for pos, count, _ in self._checks:
+            out.append(vals[pos] if count is None else tuple(vals[pos:pos + count]))
+        return tuple.__new__(self.value_class, out)
+
+    def decode(self, payload: bytes) -> StructValue:
+        return self._build(self._decode_flat(payload))
+
+    def check(self, value: Any) -> StructValue:
+        return self._build(self._flatten(value))
+
+    def from_json(self, obj: Any) -> Any:
+        if isinstance(obj, Mapping):
+            return self.check(obj)
+        return obj
+
+    def to_json(self, value: Any) -> Any:
+        return {f: (list(v) if isinstance(v, tuple) else v) for f, v in zip(self.fields, value)}
+
+
+class StrCodec(Codec):
+    kind = "str"
+
+    def __init__(self, type_obj: Mapping[str, Any], where: str = "value") -> None:
+        super().__init__(type_obj)
+        self.capacity = int(type_obj["c"])
+        self.size = None
+        self.max_size = 1 + self.capacity
+        self._where = where
+
+    def encode(self, value: Any) -> bytes:
+        if isinstance(value, str):
+            data = value.encode("utf-8")
+        elif isinstance(value, (bytes, bytearray)):
+            data = bytes(value)
+        else:
+            raise InvalidValue(f"{self._where}: expected a string, got {_describe(value)}", BAD_VALUE)
+        if len(data) > self.capacity:
+            raise InvalidValue(f"{self._where}: string of {len(data)} UTF-8 bytes exceeds the capacity of {self.capacity}", BAD_VALUE)
+        return bytes((len(data),)) + data
+
+    def decode(self, payload: bytes) -> str:
+        if not payload:
+            raise InvalidValue(f"{self.name} payload must hold a length byte, got 0 bytes", BAD_LENGTH)
+        n = payload[0]
+        if n > self.capacity:
+            raise InvalidValue(f"string length {n} exceeds the capacity of {self.capacity}", BAD_VALUE)
+        if len(payload) != 1 + n:
+            raise _bad_length(self.name, 1 + n, len(payload))
+        return bytes(payload[1:]).decode("utf-8", "replace")
+
+    def check(self, value: Any) -> str:
+        self.encode(value)
+        return value if isinstance(value, str) else bytes(value).decode("utf-8", "replace")
+
+    def parse_text(self, text: str) -> str:
+        """The text itself, or the decoded string if it is a JSON string literal (``'"a b"'``)."""
+        if len(text) >= 2 and text[0] == text[-1] == '"':
+            try:
+                v = json.loads(text)
+            except ValueError:
+                v = None
+            if isinstance(v, str):
+                text = v
+        return self.check(text)
+
+
+class VoidCodec(Codec):
+    kind = "void"
+
+    def encode(self, value: Any = None) -> bytes:
+        if value is not None:
+            raise InvalidValue(f"this takes no value, got {_describe(value)}", BAD_VALUE)
+        return b""
+
+    def decode(self, payload: bytes) -> None:
+        if payload:
+            raise _bad_length("void", 0, len(payload))
+        return None
+
+    def check(self, value: Any) -> None:
+        return self.encode(value) and None  # type: ignore[func-returns-value]
+
+    def parse_text(self, text: str) -> None:
+        raise InvalidValue("this takes no value", BAD_VALUE)
+
+
+def codec_for(type_obj: Mapping[str, Any], where: str = "value", class_name: str = "Struct") -> Codec:
+    """Build the codec of a descriptor type object (assumed valid; see :mod:`hubwire.descriptor`).
+
+    ``where`` names the value in error messages (e.g. the channel name); ``class_name`` names the
+    struct value class.
+    """
+    t = type_obj.get("t")
+    if t == "void":
+        return VoidCodec(type_obj)
+    if t == "str":
+        return StrCodec(type_obj, where)
+    if t == "struct":
+        return StructCodec(type_obj, where, class_name)
+    if t in SCALARS:
+        if "c" in type_obj:
+            return ArrayCodec(type_obj, where)
+        return ScalarCodec(type_obj, where)
+    raise ValueError(f"unknown type {t!r}")

@@ -1,0 +1,107 @@
+"""Hub session paths the emulator cannot reach, against a scripted device on a pty."""
+from __future__ import annotations
+
+import os
+from typing import Any, List
+
+import pytest
+import serial.tools.list_ports
+
+import hubwire
+from hubwire import device as devmod
+from hubwire.errors import DescriptorError, NoDeviceFound, ProtocolVersionError, Timeout
+
+from fakedevice import DESCRIPTOR, FakeDevice
+
+
+def test_fake_device_works(cache_dir: str) -> None:
+    with FakeDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
+        assert dev.descriptor.raw == DESCRIPTOR
+        dev.x = 513
+        assert dev.x == 513 and fake.x == 513
+
+
+def test_boot_noise_is_counted_not_fatal(cache_dir: str) -> None:
+    noise = b"\r\nbootloader v1.2\r\n\x00\xff\xfe garbage \x00\x00" + b"\x41" * 600 + b"\x00"
+    with FakeDevice(noise=noise) as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
+        c = dev.health().hub_counters
+        assert c["dropped"] + c["crc"] + c["overflow"] >= 3 and c["overflow"] >= 1
+        assert dev.state == "ready"
+
+
+def test_protocol_version_mismatch_names_both_versions(cache_dir: str) -> None:
+    with FakeDevice(version=2) as fake:
+        with pytest.raises(ProtocolVersionError) as e:
+            hubwire.connect(fake.path, cache_dir=cache_dir, timeout=2)
+    assert e.value.device_version == 2 and e.value.hub_version == 1
+    assert "version 2" in str(e.value) and "version 1" in str(e.value)
+
+
+def test_descriptor_hash_mismatch_is_an_error(cache_dir: str) -> None:
+    with FakeDevice(announced_hash=0xDEADBEEF) as fake:
+        with pytest.raises(DescriptorError) as e:
+            hubwire.connect(fake.path, cache_dir=cache_dir, timeout=2)
+        assert all(n == 3 for n in fake.chunk_requests.values())  # downloaded again, three times in all
+    assert "hash mismatch" in str(e.value) and "deadbeef" in str(e.value)
+    assert os.listdir(cache_dir) == []  # nothing cached
+
+
+def test_invalid_descriptor_is_rejected(cache_dir: str) -> None:
+    bad = b'{"p":1,"n":"fake","ch":[{"id":1,"n":"x","a":"rq","t":"u16"}]}'
+    with FakeDevice(bad) as fake:
+        with pytest.raises(DescriptorError) as e:
+            hubwire.connect(fake.path, cache_dir=cache_dir, timeout=2)
+    assert "unknown access letter" in str(e.value)
+
+
+def test_lost_chunks_are_asked_again(cache_dir: str) -> None:
+    # every chunk's first answer is lost; several requests are in flight at once
+    with FakeDevice(drop_chunk=lambda off, nth: nth == 0) as fake:
+        with hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
+            assert dev.descriptor.raw == DESCRIPTOR
+            stats = dict(dev.session.stats)
+        assert len(fake.chunk_requests) == -(-len(DESCRIPTOR) // 28)
+        assert all(n == 2 for n in fake.chunk_requests.values())
+    assert stats["retries"] >= len(fake.chunk_requests)
+
+
+def test_progress_reports_the_download(cache_dir: str) -> None:
+    seen: List[Any] = []
+    with FakeDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir, progress=lambda a, b: seen.append((a, b))):
+        pass
+    assert seen[-1] == (len(DESCRIPTOR), len(DESCRIPTOR))
+    assert [a for a, _ in seen] == sorted(a for a, _ in seen)
+
+
+def test_connect_timeout_when_nothing_answers(tmp_path: Any) -> None:
+    master, slave = os.openpty()
+    try:
+        os.write(master, b"noise\x00")
+        with pytest.raises(Timeout) as e:
+            hubwire.connect(os.ttyname(slave), timeout=0.5)
+        assert os.ttyname(slave) in str(e.value) and "0.5 s" in str(e.value)
+        hellos = os.read(master, 4096)
+        assert hellos.count(b"\x00") >= 3  # one hello every 100 ms
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
+class FakePort:
+    def __init__(self, device: str, vid: Any, pid: Any, description: str = "") -> None:
+        self.device, self.vid, self.pid, self.description = device, vid, pid, description
+
+
+def test_find_port(monkeypatch: Any) -> None:
+    monkeypatch.setattr(serial.tools.list_ports, "comports",
+                        lambda: [FakePort("/dev/ttyS0", None, None), FakePort("/dev/ttyACM0", 0x2341, 0x0043, "Uno")])
+    assert devmod.find_port() == "/dev/ttyACM0"
+    monkeypatch.setattr(serial.tools.list_ports, "comports", lambda: [FakePort("/dev/ttyS0", None, None)])
+    with pytest.raises(NoDeviceFound) as e:
+        devmod.find_port()
+    assert "/dev/ttyS0" in str(e.value) and "2341" in str(e.value)
+    monkeypatch.setattr(serial.tools.list_ports, "comports",
+                        lambda: [FakePort("/dev/ttyUSB0", 0x1A86, 0x7523), FakePort("/dev/ttyACM1", 0x2E8A, 0x000A)])
+    with pytest.raises(NoDeviceFound) as e:
+        hubwire.connect()
+    assert "2 boards" in str(e.value) and "/dev/ttyUSB0" in str(e.value) and "/dev/ttyACM1" in str(e.value)

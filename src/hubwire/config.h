@@ -1,0 +1,78 @@
+// Hubwire compile-time settings. Every buffer the library owns is sized here; nothing is allocated
+// at run time. Override any value with a compiler flag (PlatformIO: build_flags = -DHUBWIRE_...=N).
+#ifndef HUBWIRE_CONFIG_H
+#define HUBWIRE_CONFIG_H
+
+// Largest payload the device accepts and sends (bytes). Sets both frame buffers: 2 x (5 + this).
+#ifndef HUBWIRE_MAX_PAYLOAD
+#define HUBWIRE_MAX_PAYLOAD 32
+#endif
+
+// Events waiting for the hub's ACK, and the largest event value in bytes.
+#ifndef HUBWIRE_EVENT_QUEUE
+#define HUBWIRE_EVENT_QUEUE 4
+#endif
+#ifndef HUBWIRE_EVENT_MAX_PAYLOAD
+#define HUBWIRE_EVENT_MAX_PAYLOAD 8
+#endif
+
+// Channels the hub may subscribe to at the same time.
+#ifndef HUBWIRE_MAX_STREAMS
+#define HUBWIRE_MAX_STREAMS 4
+#endif
+
+// Largest return value of a callable action (bytes), kept to answer a retried call without
+// calling the function twice.
+#ifndef HUBWIRE_MAX_RETURN
+#define HUBWIRE_MAX_RETURN 8
+#endif
+
+// Highest channel id (channels are numbered 1..N in declaration order).
+#ifndef HUBWIRE_MAX_CHANNELS
+#define HUBWIRE_MAX_CHANNELS 32
+#endif
+
+// Timing, in milliseconds.
+#ifndef HUBWIRE_HEARTBEAT_MS
+#define HUBWIRE_HEARTBEAT_MS 250
+#endif
+#ifndef HUBWIRE_EVENT_RETRY_MS
+#define HUBWIRE_EVENT_RETRY_MS 100
+#endif
+#ifndef HUBWIRE_ANNOUNCE_MS
+#define HUBWIRE_ANNOUNCE_MS 1000
+#endif
+#ifndef HUBWIRE_MIN_STREAM_INTERVAL_MS
+#define HUBWIRE_MIN_STREAM_INTERVAL_MS 10
+#endif
+// The link is lost after this many of the hub's heartbeat intervals without a valid frame.
+#ifndef HUBWIRE_LOST_AFTER_BEATS
+#define HUBWIRE_LOST_AFTER_BEATS 4
+#endif
+
+// f64 values exist only where double is 8 bytes (not on AVR, where double is float).
+#if defined(__SIZEOF_DOUBLE__) && __SIZEOF_DOUBLE__ == 8
+#define HUBWIRE_HAS_F64 1
+#else
+#define HUBWIRE_HAS_F64 0
+#endif
+
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "Hubwire copies values as little-endian memory; big-endian targets are not supported"
+#endif
+
+namespace hubwire {
+static_assert(HUBWIRE_MAX_PAYLOAD >= 16 && HUBWIRE_MAX_PAYLOAD <= 255,
+              "HUBWIRE_MAX_PAYLOAD must be 16..255 (hello needs 16 bytes)");
+static_assert(HUBWIRE_EVENT_QUEUE >= 1 && HUBWIRE_EVENT_QUEUE <= 64, "HUBWIRE_EVENT_QUEUE must be 1..64");
+static_assert(HUBWIRE_EVENT_MAX_PAYLOAD >= 1 && HUBWIRE_EVENT_MAX_PAYLOAD <= HUBWIRE_MAX_PAYLOAD,
+              "HUBWIRE_EVENT_MAX_PAYLOAD must be 1..HUBWIRE_MAX_PAYLOAD");
+static_assert(HUBWIRE_MAX_STREAMS >= 0 && HUBWIRE_MAX_STREAMS <= 32, "HUBWIRE_MAX_STREAMS must be 0..32");
+static_assert(HUBWIRE_MAX_RETURN >= 1 && HUBWIRE_MAX_RETURN <= HUBWIRE_MAX_PAYLOAD,
+              "HUBWIRE_MAX_RETURN must be 1..HUBWIRE_MAX_PAYLOAD");
+static_assert(HUBWIRE_MAX_CHANNELS >= 1 && HUBWIRE_MAX_CHANNELS <= 255, "HUBWIRE_MAX_CHANNELS must be 1..255");
+static_assert(HUBWIRE_HEARTBEAT_MS >= 10 && HUBWIRE_HEARTBEAT_MS <= 60000, "HUBWIRE_HEARTBEAT_MS must be 10..60000");
+static_assert(HUBWIRE_LOST_AFTER_BEATS >= 2, "HUBWIRE_LOST_AFTER_BEATS must be at least 2");
+}  // namespace hubwire
+
+#endif

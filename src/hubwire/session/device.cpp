@@ -1,0 +1,649 @@
+#include "device.h"
+
+#include "../wire/bytes.h"
+
+namespace hubwire {
+
+namespace {
+const uint8_t kMaxNameLength = 32;
+const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
+
+bool validName(Text n) {
+  uint16_t len = n.length();
+  if (len == 0 || len > kMaxNameLength) return false;
+  for (uint16_t i = 0; i < len; ++i) {
+    char c = n.at(i);
+    bool alpha = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
+    if (!alpha && !(i > 0 && c >= '0' && c <= '9')) return false;
+  }
+  return true;
+}
+
+bool sameText(Text a, Text b) {
+  for (uint16_t i = 0;; ++i) {
+    char c = a.at(i);
+    if (c != b.at(i)) return false;
+    if (c == 0) return true;
+  }
+}
+}  // namespace
+
+// ---------------------------------------------------------------- declarations
+
+Device::Builder& Device::Builder::writable() {
+  if (!dev_.skip_) dev_.info_.access |= kWritable;
+  return *this;
+}
+Device::Builder& Device::Builder::streamable() {
+  if (!dev_.skip_) dev_.info_.access |= kStreamable;
+  return *this;
+}
+Device::Builder& Device::Builder::range(float min, float max) {
+  if (!dev_.skip_) {
+    dev_.info_.min = min;
+    dev_.info_.max = max;
+    dev_.info_.flags |= kHasRange;
+  }
+  return *this;
+}
+Device::Builder& Device::Builder::unit(Text u) {
+  if (!dev_.skip_) dev_.info_.unit = u;
+  return *this;
+}
+Device::Builder& Device::Builder::describe(Text d) {
+  if (!dev_.skip_) dev_.info_.description = d;
+  return *this;
+}
+Device::Builder& Device::Builder::failsafe(float value) {
+  if (!dev_.skip_) {
+    dev_.info_.failsafe = value;
+    dev_.info_.flags |= kHasFailsafe;
+  }
+  return *this;
+}
+Device::Builder& Device::Builder::onChange(void (*fn)()) {
+  if (!dev_.skip_) dev_.info_.fn = fn;
+  return *this;
+}
+
+Device::Device(ByteStream& stream, Clock& clock)
+    : stream_(stream),
+      clock_(clock),
+      rx_(rxBuf_, sizeof(rxBuf_)),
+      tx_(txBuf_, sizeof(txBuf_)),
+      declarations_(nullptr),
+      builder_(*this),
+      mode_(kIdle),
+      skip_(false),
+      pending_(false),
+      json_(nullptr),
+      channelCount_(0),
+      error_(kSetupNoDeclarations),
+      errorChannel_(0),
+      descLength_(0),
+      descHash_(0),
+      nonce_(0),
+      hubNonce_(0),
+      started_(false),
+      linked_(false),
+      hubKnown_(false),
+      peerMax_(HUBWIRE_MAX_PAYLOAD),
+      peerBeatMs_(HUBWIRE_HEARTBEAT_MS),
+      onLinkUp_(nullptr),
+      onLinkLost_(nullptr),
+      eventHead_(0),
+      eventCount_(0),
+      eventSeq_(0),
+      eventInFlight_(false) {
+#if HUBWIRE_MAX_STREAMS > 0
+  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
+#endif
+}
+
+Device::Builder& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {
+  if (pending_) finishChannel();
+  ++visitId_;
+  if (!skip_) {
+    info_ = ChannelInfo();
+    info_.name = name;
+    info_.type = type;
+    info_.data = data;
+    info_.memSize = memSize;
+    info_.access = access;
+  }
+  pending_ = true;
+  return builder_;
+}
+
+Device::Builder& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(),
+                                     Thunk thunk) {
+  Builder& b = declare(name, nullptr, ValueType{arg, 0, Text()}, scalarSize(arg), access);
+  if (!skip_) {
+    info_.ret = ValueType{ret, 0, Text()};
+    info_.fn = fn;
+    info_.thunk = thunk;
+  }
+  return b;
+}
+
+void Device::visit(Mode mode, uint8_t target) {
+  mode_ = mode;
+  target_ = target;
+  visitId_ = 0;
+  skip_ = false;
+  pending_ = false;
+  if (declarations_) declarations_();
+  if (pending_) finishChannel();
+  mode_ = kIdle;
+}
+
+void Device::finishChannel() {
+  pending_ = false;
+  if (skip_) return;
+  switch (mode_) {
+    case kCheck:
+      checkChannel();
+      break;
+    case kFind:
+      if (visitId_ == target_) skip_ = true;  // keep info_ as it is
+      break;
+    case kDescribe:
+      describeChannel();
+      break;
+    case kFailsafe:
+      if ((info_.flags & kHasFailsafe) && info_.data && isScalar(info_.type.code)) {
+        uint8_t n = info_.type.count ? info_.type.count : 1;
+        uint8_t size = scalarSize(info_.type.code);
+        for (uint8_t i = 0; i < n; ++i) storeScalar(info_.type.code, info_.failsafe, (uint8_t*)info_.data + i * size);
+      }
+      break;
+    default:
+      break;
+  }
+}
+
+bool Device::find(uint8_t id) {
+  if (id == 0 || id > channelCount_) return false;
+  visit(kFind, id);
+  return skip_;
+}
+
+void Device::checkChannel() {
+  if (error_ != kSetupOk) return;
+  uint8_t id = visitId_;
+  SetupError e = kSetupOk;
+  const ValueType& t = info_.type;
+  if (id > HUBWIRE_MAX_CHANNELS) {
+    e = kSetupTooManyChannels;
+  } else if (!validName(info_.name)) {
+    e = kSetupBadName;
+  } else if (t.code == kVoid && !(info_.access & kCallable)) {
+    e = kSetupBadType;  // a variable of a type Hubwire cannot carry (e.g. 8-byte integers)
+  } else if (t.code == kStruct) {
+    LayoutReader r(t.layout);
+    LayoutField f;
+    uint8_t n = 0;
+    while (r.next(f)) ++n;
+    if (!r.ok || n == 0 || t.memSize() != info_.memSize) e = kSetupBadLayout;
+  }
+  if (e == kSetupOk) {
+    uint16_t size = t.wireSize() > info_.ret.wireSize() ? t.wireSize() : info_.ret.wireSize();
+    if (size + kSampleHeader > HUBWIRE_MAX_PAYLOAD || info_.ret.wireSize() > HUBWIRE_MAX_RETURN ||
+        ((info_.access & kEventAccess) && size > HUBWIRE_EVENT_MAX_PAYLOAD))
+      e = kSetupTooLarge;
+#if !HUBWIRE_HAS_F64
+    if (t.code == kF64 || info_.ret.code == kF64) e = kSetupBadType;
+#endif
+  }
+  if (e == kSetupOk && info_.eventId) *info_.eventId = id;
+  if (e != kSetupOk) {
+    error_ = e;
+    errorChannel_ = id;
+  }
+  channelCount_ = id;
+}
+
+// ---------------------------------------------------------------- descriptor
+
+static void putAccess(JsonWindow& j, uint8_t a) {
+  j.put('"');
+  if (a & kReadable) j.put('r');
+  if (a & kWritable) j.put('w');
+  if (a & kCallable) j.put('c');
+  if (a & kEventAccess) j.put('e');
+  if (a & kStreamable) j.put('s');
+  j.put('"');
+}
+
+static void putType(JsonWindow& j, const char* typeKey, const char* countKey, const ValueType& t) {
+  j.key(typeKey);
+  j.text(typeName(t.code));
+  if (t.count) {
+    j.key(countKey);
+    j.uinteger(t.count);
+  }
+  if (t.code != kStruct) return;
+  j.key("f");
+  j.put('[');
+  LayoutReader r(t.layout);
+  LayoutField f;
+  bool first = true;
+  while (r.next(f)) {
+    if (!first) j.put(',');
+    first = false;
+    j.put('{');
+    j.noComma();
+    j.key("n");
+    j.put('"');
+    for (uint16_t i = 0; i < f.nameLen; ++i) j.put(t.layout.at((uint16_t)(f.nameStart + i)));
+    j.put('"');
+    j.key("t");
+    j.text(typeName(f.code));
+    if (f.count) {
+      j.key("c");
+      j.uinteger(f.count);
+    }
+    j.put('}');
+  }
+  j.put(']');
+}
+
+void Device::describeChannel() {
+  JsonWindow& j = *json_;
+  if (visitId_ > 1) j.put(',');
+  j.put('{');
+  j.noComma();
+  j.key("id");
+  j.uinteger(visitId_);
+  j.key("n");
+  j.text(info_.name);
+  j.key("a");
+  putAccess(j, info_.access);
+  putType(j, "t", "c", info_.type);
+  if ((info_.access & kCallable) && info_.ret.code != kVoid) putType(j, "rt", "rc", info_.ret);
+  if (!info_.unit.empty()) {
+    j.key("u");
+    j.text(info_.unit);
+  }
+  if (info_.flags & kHasRange) {
+    j.key("min");
+    j.number(info_.min);
+    j.key("max");
+    j.number(info_.max);
+  }
+  if (info_.flags & kHasFailsafe) {
+    j.key("fs");
+    j.number(info_.failsafe);
+  }
+  if (!info_.description.empty()) {
+    j.key("d");
+    j.text(info_.description);
+  }
+  j.put('}');
+}
+
+uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
+  JsonWindow j(start, len, out);
+  json_ = &j;
+  j.put('{');
+  j.key("p");
+  j.uinteger(kProtocolVersion);
+  j.key("n");
+  j.text(name_);
+  if (!firmware_.empty()) {
+    j.key("fw");
+    j.text(firmware_);
+  }
+  j.key("ch");
+  j.put('[');
+  visit(kDescribe);
+  j.put(']');
+  j.put('}');
+  json_ = nullptr;
+  descHash_ = j.hash();
+  return j.length();
+}
+
+// ---------------------------------------------------------------- running
+
+bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t nonce) {
+  declarations_ = declarations;
+  name_ = name;
+  firmware_ = firmware;
+  channelCount_ = 0;
+  errorChannel_ = 0;
+  error_ = declarations ? kSetupOk : kSetupNoDeclarations;
+  if (error_ == kSetupOk) visit(kCheck);
+  if (error_ == kSetupOk && !validName(name)) error_ = kSetupBadName;
+  // Unique names: pairwise comparison by nested finds into a copy (begin() only).
+  for (uint8_t a = 2; a <= channelCount_ && error_ == kSetupOk; ++a) {
+    find(a);
+    Text na = info_.name;
+    for (uint8_t b = 1; b < a; ++b) {
+      find(b);
+      if (sameText(na, info_.name)) {
+        error_ = kSetupBadName;
+        errorChannel_ = a;
+        break;
+      }
+    }
+  }
+  if (error_ != kSetupOk) {
+    started_ = false;
+    return false;
+  }
+  descLength_ = describe(0, 0, nullptr);
+  nonce_ = nonce ? nonce : 0x48570001UL;  // never 0 (the protocol reserves it)
+  started_ = true;
+  linked_ = false;
+  uint32_t now = clock_.millis();
+  lastAnnounce_ = now;
+  sendHello(false);  // may be lost (the hub may not be listening yet); we repeat while unlinked
+  return true;
+}
+
+void Device::update() {
+  if (!started_) return;
+  for (uint8_t i = 0; i < kMaxBytesPerUpdate; ++i) {
+    int c = stream_.read();
+    if (c < 0) break;
+    if (rx_.feed((uint8_t)c)) handle(rx_.frame());
+  }
+  uint32_t now = clock_.millis();
+  if (!linked_) {
+    if (now - lastAnnounce_ >= HUBWIRE_ANNOUNCE_MS) {
+      lastAnnounce_ = now;
+      sendHello(false);
+    }
+    return;
+  }
+  if (now - lastRx_ >= (uint32_t)peerBeatMs_ * HUBWIRE_LOST_AFTER_BEATS) {
+    loseLink();
+    return;
+  }
+  if (!beatSent_ || now - lastBeat_ >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat();
+  if (eventCount_ && (!eventInFlight_ || now - eventSentAt_ >= HUBWIRE_EVENT_RETRY_MS)) sendEvent();
+  sendSamples();
+}
+
+void Device::handle(const Frame& f) {
+  lastRx_ = clock_.millis();
+  switch (f.type) {
+    case kMsgHello:
+      onHello(f);
+      return;
+    case kMsgHeartbeat:
+      if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      return;
+    case kMsgAck:
+    case kMsgNak:
+      onAck(f, f.type == kMsgNak);
+      return;
+    case kMsgChunk:
+    case kMsgRequest:
+    case kMsgControl:
+    case kMsgSubscribe:
+      break;
+    default:
+      ++rx_.counters.dropped;
+      sendNak(f, kErrUnknownType);
+      return;
+  }
+  if (!linked_) {
+    sendNak(f, kErrNotLinked);
+    return;
+  }
+  bool duplicate = f.type == kMsgControl && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ &&
+                   f.id == lastTxnId_;
+  if (duplicate) {  // a retried control: answer again, do not apply twice
+    memcpy(tx_.payload(), replyData_, replyLen_);
+    reply(replyType_, f, replyLen_);
+    return;
+  }
+  lastTxnValid_ = true;
+  lastTxnControl_ = f.type == kMsgControl;
+  lastTxnSeq_ = f.seq;
+  lastTxnId_ = f.id;
+  switch (f.type) {
+    case kMsgChunk:
+      onChunk(f);
+      break;
+    case kMsgRequest:
+      onRequest(f);
+      break;
+    case kMsgControl:
+      onControl(f);
+      break;
+    default:
+      onSubscribe(f);
+      break;
+  }
+}
+
+void Device::onHello(const Frame& f) {
+  if (f.len < kHelloSize) {
+    ++rx_.counters.dropped;
+    sendNak(f, kErrBadLength);
+    return;
+  }
+  const uint8_t* p = f.payload;
+  if (!(p[1] & kHelloReply)) sendHello(true);
+  if (p[0] != kProtocolVersion || (p[1] & kHelloDevice)) return;  // the hub reports the mismatch
+  uint32_t nonce = loadU32(p + 2);
+  if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
+  uint16_t max = loadU16(p + 6);
+  peerMax_ = (uint8_t)(max > 255 ? 255 : max);
+  uint16_t beat = loadU16(p + 8);
+  peerBeatMs_ = beat < 10 ? 10 : beat;
+  if (!linked_) {
+    linked_ = true;
+    beatSent_ = false;
+    eventInFlight_ = false;  // send the head event again right away
+    if (onLinkUp_) onLinkUp_();
+  }
+}
+
+void Device::newHubSession(uint32_t nonce) {
+  hubKnown_ = true;
+  hubNonce_ = nonce;
+  lastTxnValid_ = false;
+#if HUBWIRE_MAX_STREAMS > 0
+  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
+#endif
+}
+
+void Device::loseLink() {
+  linked_ = false;
+  visit(kFailsafe);
+#if HUBWIRE_MAX_STREAMS > 0
+  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
+#endif
+  lastAnnounce_ = clock_.millis();
+  if (onLinkLost_) onLinkLost_();
+}
+
+void Device::onAck(const Frame& f, bool nak) {
+  (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
+  if (!eventInFlight_ || f.seq != eventSeq_ || f.id != events_[eventHead_].id) return;
+  eventInFlight_ = false;
+  eventHead_ = (uint8_t)((eventHead_ + 1) % HUBWIRE_EVENT_QUEUE);
+  --eventCount_;
+}
+
+void Device::onChunk(const Frame& f) {
+  if (f.len != kChunkRequestSize) return sendNak(f, kErrBadLength);
+  uint16_t offset = loadU16(f.payload);
+  uint8_t want = f.payload[2];
+  if (offset > descLength_) return sendNak(f, kErrBadOffset);
+  uint16_t n = (uint16_t)(maxOut() - kChunkHeader);
+  if (want < n) n = want;
+  if (descLength_ - offset < n) n = (uint16_t)(descLength_ - offset);
+  uint8_t* out = tx_.payload();
+  storeU16(out, offset);
+  storeU16(out + 2, descLength_);
+  describe(offset, n, out + kChunkHeader);
+  reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
+}
+
+void Device::onRequest(const Frame& f) {
+  if (!find(f.id)) return sendNak(f, kErrUnknownChannel);
+  if (!(info_.access & kReadable)) return sendNak(f, kErrNotReadable);
+  if (f.len != 0) return sendNak(f, kErrBadLength);
+  reply(kMsgResponse, f, (uint8_t)info_.type.toWire(info_.data, tx_.payload()));
+}
+
+void Device::onControl(const Frame& f) {
+  uint8_t code = kOk;
+  uint8_t type = kMsgAck, len = 0;
+  if (!find(f.id)) {
+    code = kErrUnknownChannel;
+  } else if (!(info_.access & (kWritable | kCallable))) {
+    code = kErrNotWritable;
+  } else {
+    const ValueType& t = info_.type;
+    code = t.check(f.payload, f.len);
+    if (code == kOk && (info_.flags & kHasRange) && isScalar(t.code)) {
+      uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
+      for (uint8_t i = 0; i < n && code == kOk; ++i) {
+        double v = scalarAsDouble(t.code, f.payload + i * size);
+        if (v < info_.min || v > info_.max) code = kErrOutOfRange;
+      }
+    }
+    if (code == kOk) {
+      if (info_.thunk) {
+        uint8_t* ret = tx_.payload();
+        if (!info_.thunk(info_.fn, f.payload, ret)) {
+          code = kErrRejected;
+        } else if (info_.ret.code != kVoid) {
+          type = kMsgResponse;
+          len = (uint8_t)info_.ret.wireSize();
+        }
+      } else {
+        t.fromWire(f.payload, f.len, info_.data);
+        if (info_.fn) info_.fn();
+      }
+    }
+  }
+  if (code != kOk) {
+    type = kMsgNak;
+    len = 1;
+    tx_.payload()[0] = code;
+  }
+  replyType_ = type;
+  replyLen_ = len;
+  memcpy(replyData_, tx_.payload(), len);
+  reply(type, f, len);
+}
+
+void Device::onSubscribe(const Frame& f) {
+  if (!find(f.id)) return sendNak(f, kErrUnknownChannel);
+  if (!(info_.access & kStreamable)) return sendNak(f, kErrNotStreamable);
+  if (f.len != 2) return sendNak(f, kErrBadLength);
+  uint16_t interval = loadU16(f.payload);
+#if HUBWIRE_MAX_STREAMS > 0
+  Subscription* slot = nullptr;
+  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
+    if (streams_[i].id == f.id) slot = &streams_[i];
+  }
+  if (interval == 0) {
+    if (slot) slot->id = 0;
+  } else {
+    if (!slot) {
+      for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS && !slot; ++i)
+        if (streams_[i].id == 0) slot = &streams_[i];
+      if (!slot) return sendNak(f, kErrBusy);
+      slot->seq = 0;
+    }
+    if (interval < HUBWIRE_MIN_STREAM_INTERVAL_MS) interval = HUBWIRE_MIN_STREAM_INTERVAL_MS;
+    slot->id = f.id;
+    slot->interval = interval;
+    slot->due = (uint16_t)clock_.millis();
+    slot->first = true;
+  }
+#else
+  if (interval != 0) return sendNak(f, kErrBusy);
+#endif
+  storeU16(tx_.payload(), interval);
+  reply(kMsgAck, f, 2);
+}
+
+void Device::sendSamples() {
+#if HUBWIRE_MAX_STREAMS > 0
+  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
+    Subscription& s = streams_[i];
+    if (!s.id) continue;
+    uint16_t now = (uint16_t)clock_.millis();
+    if ((int16_t)(now - s.due) < 0) continue;
+    if (!find(s.id)) {
+      s.id = 0;
+      continue;
+    }
+    uint8_t* out = tx_.payload();
+    uint16_t len = info_.type.toWire(info_.data, out + kSampleHeader);
+    if (stream_.writable() < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
+    storeU16(out, s.first ? 0 : (uint16_t)(now - s.last));
+    tx_.send(stream_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));
+    s.first = false;
+    s.last = now;
+    // Keep the schedule (no drift), unless we fell more than one interval behind.
+    s.due = (uint16_t)(s.due + s.interval);
+    if ((int16_t)(now - s.due) >= 0) s.due = (uint16_t)(now + s.interval);
+  }
+#endif
+}
+
+bool Device::emitRaw(uint8_t id, const void* value, ValueType type) {
+  if (!started_ || id == 0 || eventCount_ >= HUBWIRE_EVENT_QUEUE) return false;
+  QueuedEvent& e = events_[(eventHead_ + eventCount_) % HUBWIRE_EVENT_QUEUE];
+  e.id = id;
+  e.len = (uint8_t)type.toWire(value, e.data);
+  ++eventCount_;
+  return true;
+}
+
+void Device::sendEvent() {
+  QueuedEvent& e = events_[eventHead_];
+  if (!eventInFlight_) {
+    ++eventSeq_;  // a new event: a new seq. A retry keeps it.
+    eventInFlight_ = true;
+  }
+  memcpy(tx_.payload(), e.data, e.len);
+  tx_.send(stream_, kMsgEvent, eventSeq_, e.id, e.len);
+  eventSentAt_ = clock_.millis();
+}
+
+void Device::sendHello(bool isReply) {
+  uint8_t* p = tx_.payload();
+  p[0] = kProtocolVersion;
+  p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
+  storeU32(p + 2, nonce_);
+  storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
+  storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
+  storeU32(p + 10, descHash_);
+  storeU16(p + 14, descLength_);
+  tx_.send(stream_, kMsgHello, 0, 0, kHelloSize);
+}
+
+void Device::sendHeartbeat() {
+  uint32_t now = clock_.millis();
+  uint8_t* p = tx_.payload();
+  uint32_t since = beatSent_ ? now - lastBeat_ : 0;
+  ++beatCounter_;
+  storeU16(p, beatCounter_);
+  storeU16(p + 2, (uint16_t)(since > 0xFFFF ? 0xFFFF : since));
+  storeU16(p + 4, rx_.counters.crc);
+  storeU16(p + 6, rx_.counters.overflow);
+  storeU16(p + 8, rx_.counters.dropped);
+  tx_.send(stream_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
+  lastBeat_ = now;
+  beatSent_ = true;
+}
+
+void Device::sendNak(const Frame& f, uint8_t code) {
+  tx_.payload()[0] = code;
+  reply(kMsgNak, f, 1);
+}
+
+void Device::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(stream_, type, f.seq, f.id, len); }
+
+}  // namespace hubwire

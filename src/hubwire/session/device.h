@@ -1,0 +1,306 @@
+// The device side of a Hubwire session: handshake, heartbeats, descriptor, requests, controls,
+// events and streams (docs/PROTOCOL.md 3-4), over the ByteStream and Clock seams.
+//
+// Channels are declared in a function of the sketch ("declarations"), which the device runs again
+// whenever it needs a channel's facts (to describe it, to find channel 3, to apply failsafes).
+// Nothing about a channel is copied into RAM, so a channel costs flash only: that is what lets an
+// Uno with 2 KB of SRAM carry a dozen described channels. Keep the function to declarations.
+#ifndef HUBWIRE_SESSION_DEVICE_H
+#define HUBWIRE_SESSION_DEVICE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "../config.h"
+#include "../port.h"
+#include "../text.h"
+#include "../wire/frame.h"
+#include "../wire/types.h"
+#include "json_window.h"
+#include "protocol.h"
+
+namespace hubwire {
+
+enum Access : uint8_t { kReadable = 1, kWritable = 2, kCallable = 4, kEventAccess = 8, kStreamable = 16 };
+
+// Why begin() refused the declarations; see Device::error() and errorChannel().
+enum SetupError : uint8_t {
+  kSetupOk = 0,
+  kSetupNoDeclarations,
+  kSetupTooManyChannels,  // more than HUBWIRE_MAX_CHANNELS
+  kSetupBadName,          // not [A-Za-z_][A-Za-z0-9_]*, longer than 32, or used twice
+  kSetupBadLayout,        // struct layout text malformed, or its size differs from sizeof(struct)
+  kSetupTooLarge,         // value does not fit HUBWIRE_MAX_PAYLOAD (or an event HUBWIRE_EVENT_MAX_PAYLOAD)
+  kSetupBadType,          // a type the board cannot carry (f64 without 8-byte double)
+};
+
+// Keeps a template argument from being deduced from a second parameter (emit(ev, 1.5) with
+// Event<float> converts 1.5 instead of failing to deduce).
+template <typename T>
+struct Same {
+  typedef T type;
+};
+
+// A declared event: keep one per event (a global), emit with Device::emit().
+template <typename T>
+struct Event {
+  uint8_t id = 0;  // set by begin()
+};
+
+// Calls a sketch function with a typed argument and return value, both as little-endian bytes.
+// Returns false when the function refused the value (controls returning bool).
+typedef bool (*Thunk)(void (*fn)(), const uint8_t* arg, uint8_t* ret);
+
+// Everything the declarations say about the channel being visited.
+struct ChannelInfo {
+  Text name, unit, description;
+  ValueType type;    // value, call argument, or event value
+  ValueType ret;     // callables: return value
+  void* data;        // the variable behind a readable/writable channel
+  void (*fn)();      // change callback, or the function a control/action calls
+  Thunk thunk;       // how to call fn with an argument
+  float min, max, failsafe;
+  uint16_t memSize;  // sizeof the variable, to check struct layouts
+  uint8_t access;
+  uint8_t flags;
+  uint8_t* eventId;  // events: the handle's id, set by begin()
+};
+
+class Device {
+ public:
+  enum Flags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
+
+  // Returned by every declaration; chain options onto it.
+  class Builder {
+   public:
+    Builder& writable();
+    Builder& streamable();
+    Builder& range(float min, float max);
+    Builder& unit(Text u);
+    Builder& describe(Text d);
+    Builder& failsafe(float value);
+    // Called after the hub wrote a new value into the variable.
+    Builder& onChange(void (*fn)());
+
+   private:
+    friend class Device;
+    explicit Builder(Device& d) : dev_(d) {}
+    Device& dev_;
+  };
+
+  Device(ByteStream& stream, Clock& clock);
+
+  // ---- declarations: call these only inside the function given to begin() ----
+
+  // A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
+  template <typename T>
+  Builder& expose(Text name, T& var) {
+    return declare(name, &var, ValueType{TypeOf<T>::code, 0, Text()}, sizeof(T), kReadable);
+  }
+  template <typename T, size_t N>
+  Builder& expose(Text name, T (&arr)[N]) {
+    static_assert(N <= 255, "arrays hold at most 255 elements");
+    return declare(name, arr, ValueType{TypeOf<T>::code, (uint8_t)N, Text()}, sizeof(arr), kReadable);
+  }
+  template <size_t N>
+  Builder& expose(Text name, char (&str)[N]) {
+    static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
+    return declare(name, str, ValueType{kStr, (uint8_t)(N - 1), Text()}, N, kReadable);
+  }
+  // A struct with named fields, laid out by text such as F("ax:f32,ay:f32,gyro:i16[3]").
+  template <typename T>
+  Builder& expose(Text name, T& var, Text layout) {
+    return declare(name, &var, ValueType{kStruct, 0, layout}, sizeof(T), kReadable);
+  }
+
+  // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
+  template <typename T>
+  Builder& control(Text name, void (*fn)(T)) {
+    return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callVoid<T>);
+  }
+  template <typename T>
+  Builder& control(Text name, bool (*fn)(T)) {
+    return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callChecked<T>);
+  }
+
+  // A callable action: the hub calls fn with an argument and gets its return value.
+  template <typename R, typename A>
+  Builder& action(Text name, R (*fn)(A)) {
+    return declareCall(name, kCallable, TypeOf<A>::code, TypeOf<R>::code, (void (*)())fn, &callRet<R, A>);
+  }
+  template <typename A>
+  Builder& action(Text name, void (*fn)(A)) {
+    return declareCall(name, kCallable, TypeOf<A>::code, kVoid, (void (*)())fn, &callVoid<A>);
+  }
+  template <typename R>
+  Builder& action(Text name, R (*fn)()) {
+    return declareCall(name, kCallable, kVoid, TypeOf<R>::code, (void (*)())fn, &callNoArg<R>);
+  }
+  Builder& action(Text name, void (*fn)()) {
+    return declareCall(name, kCallable, kVoid, kVoid, fn, &callPlain);
+  }
+
+  // An event the sketch emits; the hub is told exactly once.
+  template <typename T>
+  Builder& event(Text name, Event<T>& ev) {
+    Builder& b = declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text()}, sizeof(T), kEventAccess);
+    if (!skip_) info_.eventId = &ev.id;
+    return b;
+  }
+
+  // ---- running ----
+
+  // Checks the declarations, computes the descriptor hash and announces the device.
+  // false when a declaration is wrong: error() and errorChannel() say which and why.
+  bool begin(Text name, void (*declarations)(), Text firmware = Text(), uint32_t nonce = 0);
+  // Reads what arrived, answers it, sends heartbeats, retries events, streams samples. Never blocks.
+  void update();
+
+  // Queues an event for the hub; false when the queue is full or the event was not declared.
+  template <typename T>
+  bool emit(const Event<T>& ev, const typename Same<T>::type& value) {
+    return emitRaw(ev.id, &value, ValueType{TypeOf<T>::code, 0, Text()});
+  }
+
+  void onLinkUp(void (*fn)()) { onLinkUp_ = fn; }
+  // The failsafe hook: the hub has gone silent (after channels with failsafe values were reset).
+  void onLinkLost(void (*fn)()) { onLinkLost_ = fn; }
+
+  bool linked() const { return linked_; }
+  SetupError error() const { return error_; }
+  uint8_t errorChannel() const { return errorChannel_; }
+  uint8_t channelCount() const { return channelCount_; }
+  uint16_t descriptorLength() const { return descLength_; }
+  uint32_t descriptorHash() const { return descHash_; }
+  uint8_t eventsQueued() const { return eventCount_; }
+  const LinkCounters& counters() const { return rx_.counters; }
+
+ private:
+  enum Mode : uint8_t { kIdle, kCheck, kFind, kDescribe, kFailsafe };
+
+  Builder& declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access);
+  Builder& declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk);
+  void finishChannel();  // the visited channel is complete: act on it for the current mode
+  void visit(Mode mode, uint8_t target = 0);
+  bool find(uint8_t id);  // info_ describes channel id afterwards
+  void describeChannel();
+  uint16_t describe(uint16_t start, uint16_t len, uint8_t* out);  // returns the total length
+  void checkChannel();
+  bool emitRaw(uint8_t id, const void* value, ValueType type);
+
+  void handle(const Frame& f);
+  void onHello(const Frame& f);
+  void onChunk(const Frame& f);
+  void onRequest(const Frame& f);
+  void onControl(const Frame& f);
+  void onSubscribe(const Frame& f);
+  void onAck(const Frame& f, bool nak);
+  void newHubSession(uint32_t nonce);
+  void loseLink();
+  void sendHello(bool reply);
+  void sendHeartbeat();
+  void sendEvent();
+  void sendSamples();
+  void sendNak(const Frame& f, uint8_t code);
+  void reply(uint8_t type, const Frame& f, uint8_t len);
+  uint8_t maxOut() const { return peerMax_ < HUBWIRE_MAX_PAYLOAD ? peerMax_ : HUBWIRE_MAX_PAYLOAD; }
+
+  template <typename T>
+  static bool callVoid(void (*fn)(), const uint8_t* arg, uint8_t*) {
+    T a;
+    memcpy(&a, arg, sizeof(T));
+    ((void (*)(T))fn)(a);
+    return true;
+  }
+  template <typename T>
+  static bool callChecked(void (*fn)(), const uint8_t* arg, uint8_t*) {
+    T a;
+    memcpy(&a, arg, sizeof(T));
+    return ((bool (*)(T))fn)(a);
+  }
+  template <typename R, typename A>
+  static bool callRet(void (*fn)(), const uint8_t* arg, uint8_t* ret) {
+    A a;
+    memcpy(&a, arg, sizeof(A));
+    R r = ((R(*)(A))fn)(a);
+    memcpy(ret, &r, sizeof(R));
+    return true;
+  }
+  template <typename R>
+  static bool callNoArg(void (*fn)(), const uint8_t*, uint8_t* ret) {
+    R r = ((R(*)())fn)();
+    memcpy(ret, &r, sizeof(R));
+    return true;
+  }
+  static bool callPlain(void (*fn)(), const uint8_t*, uint8_t*) {
+    fn();
+    return true;
+  }
+
+  ByteStream& stream_;
+  Clock& clock_;
+  uint8_t rxBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+  uint8_t txBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+  FrameReceiver rx_;
+  FrameWriter tx_;
+
+  // Declarations and the visit in progress.
+  void (*declarations_)();
+  Text name_, firmware_;
+  ChannelInfo info_;
+  Builder builder_;
+  Mode mode_;
+  uint8_t visitId_ = 0;   // id of the channel being visited (1-based, 0 before the first)
+  uint8_t target_ = 0;    // kFind: wanted id
+  bool skip_;         // kFind: target already found; ignore the remaining declarations
+  bool pending_;      // a visited channel awaits finishChannel()
+  JsonWindow* json_;  // kDescribe
+  uint8_t channelCount_;
+  SetupError error_;
+  uint8_t errorChannel_;
+  uint16_t descLength_;
+  uint32_t descHash_;
+
+  // Session.
+  uint32_t nonce_, hubNonce_;
+  bool started_, linked_, hubKnown_;
+  uint8_t peerMax_;
+  uint16_t peerBeatMs_;
+  uint32_t lastRx_ = 0, lastBeat_ = 0, lastAnnounce_ = 0;
+  uint16_t beatCounter_ = 0;
+  bool beatSent_ = false;
+  void (*onLinkUp_)();
+  void (*onLinkLost_)();
+
+  // Duplicate suppression: the last hub transaction and, for a control, the answer it got.
+  bool lastTxnValid_ = false, lastTxnControl_ = false;
+  uint8_t lastTxnSeq_ = 0, lastTxnId_ = 0;
+  uint8_t replyType_ = 0, replyLen_ = 0;
+  uint8_t replyData_[HUBWIRE_MAX_RETURN];
+
+  // Events: a ring; only the head is in flight.
+  struct QueuedEvent {
+    uint8_t id, len;
+    uint8_t data[HUBWIRE_EVENT_MAX_PAYLOAD];
+  };
+  QueuedEvent events_[HUBWIRE_EVENT_QUEUE];
+  uint8_t eventHead_, eventCount_, eventSeq_;
+  bool eventInFlight_;
+  uint32_t eventSentAt_ = 0;
+
+  // Subscriptions (id 0 = free slot).
+  // Times are the low 16 bits of millis(): intervals stay below 65 s, so differences are exact.
+  struct Subscription {
+    uint8_t id, seq;
+    uint16_t interval, due, last;
+    bool first;
+  };
+#if HUBWIRE_MAX_STREAMS > 0
+  Subscription streams_[HUBWIRE_MAX_STREAMS];
+#endif
+};
+
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,40 @@
+// Writes the descriptor JSON as a stream of characters without keeping it anywhere: it counts every
+// character, hashes it, and copies only those that fall in the requested window into a buffer.
+// This is how a 1 KB descriptor is served in chunks from a device with 2 KB of RAM.
+#ifndef HUBWIRE_SESSION_JSON_WINDOW_H
+#define HUBWIRE_SESSION_JSON_WINDOW_H
+
+#include <stdint.h>
+
+#include "../text.h"
+
+namespace hubwire {
+
+class JsonWindow {
+ public:
+  // Copy characters [start, start + len) into out; out may be null to only count and hash.
+  JsonWindow(uint16_t start, uint16_t len, uint8_t* out) : start_(start), len_(len), out_(out), pos_(0), hash_(0x811C9DC5UL) {}
+
+  void put(char c);
+  void raw(const char* s);  // RAM literal, no escaping
+  void text(Text t);        // quoted and escaped
+  void key(const char* k);  // ,"k": or "k": as needed
+  void number(double v);
+  void uinteger(uint32_t v);
+
+  uint16_t length() const { return pos_; }
+  uint32_t hash() const { return hash_; }
+  void comma() { needComma_ = true; }
+  void noComma() { needComma_ = false; }
+
+ private:
+  uint16_t start_, len_;
+  uint8_t* out_;
+  uint16_t pos_;
+  uint32_t hash_;
+  bool needComma_ = false;
+};
+
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,39 @@
+// Message types, hello and heartbeat layouts (docs/PROTOCOL.md 2-3).
+#ifndef HUBWIRE_SESSION_PROTOCOL_H
+#define HUBWIRE_SESSION_PROTOCOL_H
+
+#include <stdint.h>
+
+namespace hubwire {
+
+const uint8_t kProtocolVersion = 1;
+
+enum MessageType : uint8_t {
+  kMsgHello = '*',
+  kMsgHeartbeat = 'H',
+  kMsgChunk = 'J',
+  kMsgRequest = 'R',
+  kMsgResponse = 'r',
+  kMsgControl = 'C',
+  kMsgAck = 0x07,
+  kMsgNak = 0x15,
+  kMsgEvent = '!',
+  kMsgSubscribe = 'S',
+  kMsgSample = 'D',
+};
+
+enum HelloFlags : uint8_t { kHelloDevice = 1, kHelloReply = 2, kHelloF64 = 4 };
+
+const uint8_t kHelloSize = 16;
+const uint8_t kHeartbeatSize = 10;
+const uint8_t kChunkRequestSize = 3;
+const uint8_t kChunkHeader = 4;
+const uint8_t kSampleHeader = 2;
+
+// FNV-1a 32, the descriptor hash carried in hello.
+const uint32_t kFnvOffset = 0x811C9DC5UL;
+inline uint32_t fnv1a(uint32_t h, uint8_t b) { return (h ^ b) * 0x01000193UL; }
+
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,44 @@
+// A string that lives either in RAM or, on AVR, in flash (from F()); read one character at a time.
+#ifndef HUBWIRE_TEXT_H
+#define HUBWIRE_TEXT_H
+
+#include <stdint.h>
+
+#if defined(__AVR__)
+#include <avr/pgmspace.h>
+#endif
+
+// Arduino's F() yields this type; declaring it here keeps the core free of Arduino.h.
+class __FlashStringHelper;
+
+namespace hubwire {
+
+struct Text {
+  const char* ptr;
+  bool flash;
+
+  Text() : ptr(nullptr), flash(false) {}
+  Text(const char* s) : ptr(s), flash(false) {}  // NOLINT: implicit on purpose
+  Text(const __FlashStringHelper* s) : ptr(reinterpret_cast<const char*>(s)), flash(true) {}  // NOLINT
+  Text(const char* s, bool inFlash) : ptr(s), flash(inFlash) {}
+
+  char at(uint16_t i) const {
+#if defined(__AVR__)
+    if (flash) return (char)pgm_read_byte(ptr + i);
+#endif
+    return ptr[i];
+  }
+  bool empty() const { return ptr == nullptr || at(0) == 0; }
+  uint16_t length() const {
+    uint16_t n = 0;
+    if (ptr)
+      while (at(n)) ++n;
+    return n;
+  }
+};
+
+inline Text flashText(const char* s) { return Text(s, true); }
+
+}  // namespace hubwire
+
+#endif

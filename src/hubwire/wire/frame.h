@@ -1,0 +1,83 @@
+// Frames: type, seq, id, payload and a CRC-16, COBS-encoded and ended by 0x00 (docs/PROTOCOL.md 1).
+#ifndef HUBWIRE_WIRE_FRAME_H
+#define HUBWIRE_WIRE_FRAME_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../port.h"
+
+namespace hubwire {
+
+const uint8_t kFrameHeader = 3;    // type, seq, id
+const uint8_t kFrameOverhead = 5;  // header + CRC
+const uint16_t kProtocolMaxPayload = 255;
+
+// Raw frame bytes needed to hold a payload of n bytes.
+#define HUBWIRE_RAW_FRAME_SIZE(n) ((n) + 5)
+
+// A decoded frame. payload points into the receiver's buffer and stays valid until the next feed().
+struct Frame {
+  uint8_t type;
+  uint8_t seq;
+  uint8_t id;
+  uint8_t len;
+  const uint8_t* payload;
+};
+
+// Frames the receiver dropped, by reason (reported in heartbeats; they wrap).
+struct LinkCounters {
+  uint16_t crc;       // CRC mismatch
+  uint16_t overflow;  // longer than the buffer
+  uint16_t dropped;   // bad COBS, too short, or rejected by the layer above
+};
+
+// Decodes the incoming byte stream one byte at a time into a fixed buffer, COBS on the fly.
+class FrameReceiver {
+ public:
+  // buffer holds capacity raw bytes: HUBWIRE_RAW_FRAME_SIZE(largest accepted payload).
+  FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), cap_(capacity) { reset(); }
+
+  // Takes one byte; true when it completed a valid frame, which frame() then describes.
+  bool feed(uint8_t byte);
+  const Frame& frame() const { return frame_; }
+  // Forget any partial frame (the next byte starts a new one).
+  void reset();
+
+  LinkCounters counters;
+
+ private:
+  uint8_t* buf_;
+  uint16_t cap_;
+  uint16_t len_;
+  uint8_t left_;         // bytes left in the current COBS block; 0 = next byte is a code byte
+  bool pendingZero_;     // the current block ends with an implied zero (code < 0xFF)
+  bool overflow_;
+  bool started_;         // any byte since the last delimiter
+  Frame frame_;
+};
+
+// Builds frames in a fixed buffer and writes them COBS-encoded to a stream.
+class FrameWriter {
+ public:
+  FrameWriter(uint8_t* buffer, uint16_t capacity) : buf_(buffer), cap_(capacity) {}
+  // Where the payload goes; room for maxPayload() bytes.
+  uint8_t* payload() { return buf_ + kFrameHeader; }
+  uint16_t maxPayload() const { return (uint16_t)(cap_ - kFrameOverhead); }
+  // Wire bytes a frame with this payload length takes at most (COBS code bytes and delimiter).
+  static size_t wireSize(size_t len) { return len + kFrameOverhead + (len + kFrameOverhead) / 254 + 2; }
+  // Adds header and CRC to the len payload bytes already in payload(), and sends the frame.
+  void send(ByteStream& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
+
+ private:
+  uint8_t* buf_;
+  uint16_t cap_;
+};
+
+// Encodes a whole frame into out (room for FrameWriter::wireSize(len)); returns bytes written,
+// delimiter included. For tests and tools; the device sends with FrameWriter.
+size_t encodeFrame(uint8_t type, uint8_t seq, uint8_t id, const uint8_t* payload, uint8_t len, uint8_t* out);
+
+}  // namespace hubwire
+
+#endif

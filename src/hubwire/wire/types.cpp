@@ -1,0 +1,296 @@
+#include "types.h"
+
+#include <string.h>
+
+namespace hubwire {
+
+namespace {
+
+#if defined(__AVR__)
+#define HUBWIRE_FLASH PROGMEM
+#else
+#define HUBWIRE_FLASH
+#endif
+
+// One flash string holding every type name, 7 bytes apart, so the table costs no pointers.
+const char kTypeNames[] HUBWIRE_FLASH =
+    "void\0\0\0bool\0\0\0u8\0\0\0\0\0i8\0\0\0\0\0u16\0\0\0\0i16\0\0\0\0u32\0\0\0\0i32\0\0\0\0f32\0\0\0\0f64\0\0\0\0"
+    "str\0\0\0\0struct";
+const uint8_t kNameStride = 7;
+
+uint8_t alignOf(TypeCode t) {
+  switch (t) {
+    case kU16:
+    case kI16:
+      return (uint8_t)alignof(uint16_t);
+    case kU32:
+    case kI32:
+      return (uint8_t)alignof(uint32_t);
+    case kF32:
+      return (uint8_t)alignof(float);
+    case kF64:
+      return (uint8_t)alignof(double);
+    default:
+      return 1;
+  }
+}
+
+uint16_t alignUp(uint16_t v, uint8_t a) { return (uint16_t)((v + a - 1) / a * a); }
+
+}  // namespace
+
+uint8_t scalarSize(TypeCode t) {
+  switch (t) {
+    case kBool:
+    case kU8:
+    case kI8:
+      return 1;
+    case kU16:
+    case kI16:
+      return 2;
+    case kU32:
+    case kI32:
+    case kF32:
+      return 4;
+    case kF64:
+      return 8;
+    default:
+      return 0;
+  }
+}
+
+bool isScalar(TypeCode t) { return t >= kBool && t <= kF64; }
+
+Text typeName(TypeCode t) {
+  if (t >= kTypeCount) t = kVoid;
+  return flashText(kTypeNames + t * kNameStride);
+}
+
+bool LayoutReader::next(LayoutField& f) {
+  if (!ok || text_.at(pos_) == 0) return false;
+  f.nameStart = pos_;
+  while (text_.at(pos_) && text_.at(pos_) != ':') ++pos_;
+  f.nameLen = (uint16_t)(pos_ - f.nameStart);
+  if (text_.at(pos_) != ':' || f.nameLen == 0) return ok = false;
+  ++pos_;
+  // Match the type name against the scalar names.
+  f.code = kVoid;
+  for (uint8_t t = kBool; t <= kF64; ++t) {
+    Text name = typeName((TypeCode)t);
+    uint8_t k = 0;
+    while (name.at(k) && name.at(k) == text_.at(pos_ + k)) ++k;
+    char after = text_.at(pos_ + k);
+    if (name.at(k) == 0 && (after == 0 || after == ',' || after == '[')) {
+      f.code = (TypeCode)t;
+      pos_ = (uint16_t)(pos_ + k);
+      break;
+    }
+  }
+  if (f.code == kVoid) return ok = false;
+  f.count = 0;
+  if (text_.at(pos_) == '[') {
+    ++pos_;
+    uint16_t n = 0;
+    while (text_.at(pos_) >= '0' && text_.at(pos_) <= '9') n = (uint16_t)(n * 10 + (text_.at(pos_++) - '0'));
+    if (text_.at(pos_) != ']' || n == 0 || n > 255) return ok = false;
+    ++pos_;
+    f.count = (uint8_t)n;
+  }
+  if (text_.at(pos_) == ',') {
+    ++pos_;
+    if (text_.at(pos_) == 0) return ok = false;
+  } else if (text_.at(pos_) != 0) {
+    return ok = false;
+  }
+  return true;
+}
+
+uint16_t ValueType::wireSize() const {
+  if (code == kStr) return (uint16_t)(1 + count);
+  if (code == kStruct) {
+    uint16_t n = 0;
+    LayoutReader r(layout);
+    LayoutField f;
+    while (r.next(f)) n = (uint16_t)(n + scalarSize(f.code) * (f.count ? f.count : 1));
+    return n;
+  }
+  return (uint16_t)(scalarSize(code) * (count ? count : 1));
+}
+
+uint16_t ValueType::memSize() const {
+  if (code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
+  if (code != kStruct) return wireSize();
+  uint16_t n = 0;
+  uint8_t maxAlign = 1;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) {
+    uint8_t a = alignOf(f.code);
+    if (a > maxAlign) maxAlign = a;
+    n = (uint16_t)(alignUp(n, a) + scalarSize(f.code) * (f.count ? f.count : 1));
+  }
+  return alignUp(n, maxAlign);
+}
+
+uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
+  const uint8_t* m = (const uint8_t*)mem;
+  if (code == kStr) {
+    uint8_t n = 0;
+    while (n < count && m[n]) ++n;
+    wire[0] = n;
+    memcpy(wire + 1, m, n);
+    return (uint16_t)(n + 1);
+  }
+  if (code != kStruct) {
+    uint16_t n = wireSize();
+    memcpy(wire, m, n);
+    return n;
+  }
+  uint16_t memOff = 0, wireOff = 0;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) {
+    uint16_t n = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
+    memOff = alignUp(memOff, alignOf(f.code));
+    memcpy(wire + wireOff, m + memOff, n);
+    memOff = (uint16_t)(memOff + n);
+    wireOff = (uint16_t)(wireOff + n);
+  }
+  return wireOff;
+}
+
+static bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
+  if (t != kBool) return true;
+  for (uint16_t i = 0; i < n; ++i)
+    if (p[i] > 1) return false;
+  return true;
+}
+
+ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
+  if (code == kStr) {
+    if (len < 1 || len != 1u + wire[0]) return kErrBadLength;
+    return wire[0] <= count ? kOk : kErrBadValue;
+  }
+  if (len != wireSize()) return kErrBadLength;
+  if (code != kStruct) return boolsValid(code, wire, len) ? kOk : kErrBadValue;
+  uint16_t off = 0;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) {
+    uint16_t n = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
+    if (!boolsValid(f.code, wire + off, n)) return kErrBadValue;
+    off = (uint16_t)(off + n);
+  }
+  return kOk;
+}
+
+void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
+  uint8_t* m = (uint8_t*)mem;
+  if (code == kStr) {
+    memcpy(m, wire + 1, wire[0]);
+    m[wire[0]] = 0;
+    return;
+  }
+  if (code != kStruct) {
+    memcpy(m, wire, len);
+    return;
+  }
+  uint16_t memOff = 0, wireOff = 0;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) {
+    uint16_t n = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
+    memOff = alignUp(memOff, alignOf(f.code));
+    memcpy(m + memOff, wire + wireOff, n);
+    memOff = (uint16_t)(memOff + n);
+    wireOff = (uint16_t)(wireOff + n);
+  }
+}
+
+double scalarAsDouble(TypeCode t, const uint8_t* p) {
+  switch (t) {
+    case kBool:
+    case kU8:
+      return p[0];
+    case kI8:
+      return (int8_t)p[0];
+    case kU16: {
+      uint16_t v;
+      memcpy(&v, p, 2);
+      return v;
+    }
+    case kI16: {
+      int16_t v;
+      memcpy(&v, p, 2);
+      return v;
+    }
+    case kU32: {
+      uint32_t v;
+      memcpy(&v, p, 4);
+      return (double)v;
+    }
+    case kI32: {
+      int32_t v;
+      memcpy(&v, p, 4);
+      return (double)v;
+    }
+    case kF32: {
+      float v;
+      memcpy(&v, p, 4);
+      return v;
+    }
+    case kF64: {
+      double v;
+      memcpy(&v, p, sizeof(double));
+      return v;
+    }
+    default:
+      return 0;
+  }
+}
+
+void storeScalar(TypeCode t, double v, void* mem) {
+  switch (t) {
+    case kBool:
+      *(uint8_t*)mem = v != 0;
+      break;
+    case kU8:
+      *(uint8_t*)mem = (uint8_t)v;
+      break;
+    case kI8:
+      *(int8_t*)mem = (int8_t)v;
+      break;
+    case kU16: {
+      uint16_t x = (uint16_t)v;
+      memcpy(mem, &x, 2);
+      break;
+    }
+    case kI16: {
+      int16_t x = (int16_t)v;
+      memcpy(mem, &x, 2);
+      break;
+    }
+    case kU32: {
+      uint32_t x = (uint32_t)v;
+      memcpy(mem, &x, 4);
+      break;
+    }
+    case kI32: {
+      int32_t x = (int32_t)v;
+      memcpy(mem, &x, 4);
+      break;
+    }
+    case kF32: {
+      float x = (float)v;
+      memcpy(mem, &x, 4);
+      break;
+    }
+    case kF64:
+      memcpy(mem, &v, sizeof(double));
+      break;
+    default:
+      break;
+  }
+}
+
+}  // namespace hubwire

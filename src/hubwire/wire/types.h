@@ -1,0 +1,117 @@
+// Channel value types and how they travel on the wire (docs/PROTOCOL.md 6).
+#ifndef HUBWIRE_WIRE_TYPES_H
+#define HUBWIRE_WIRE_TYPES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../config.h"
+#include "../text.h"
+
+namespace hubwire {
+
+enum TypeCode : uint8_t {
+  kVoid = 0,
+  kBool,
+  kU8,
+  kI8,
+  kU16,
+  kI16,
+  kU32,
+  kI32,
+  kF32,
+  kF64,
+  kStr,     // bounded string: count = capacity
+  kStruct,  // fields described by a layout text, e.g. "ax:f32,gyro:i16[3]"
+  kTypeCount
+};
+
+// NAK error codes (docs/PROTOCOL.md 5).
+enum ErrorCode : uint8_t {
+  kOk = 0,
+  kErrUnknownType = 1,
+  kErrUnknownChannel = 2,
+  kErrBadLength = 3,
+  kErrOutOfRange = 4,
+  kErrNotWritable = 5,
+  kErrNotReadable = 6,
+  kErrNotStreamable = 7,
+  kErrBusy = 8,
+  kErrBadOffset = 9,
+  kErrNotLinked = 10,
+  kErrBadValue = 11,
+  kErrRejected = 12,
+  kErrUnsupportedVersion = 13,
+};
+
+// Bytes of one scalar of this type (0 for void, str and struct).
+uint8_t scalarSize(TypeCode t);
+// The descriptor's name for the type ("f32", "str", ...).
+Text typeName(TypeCode t);
+bool isScalar(TypeCode t);
+
+// Maps C++ types to wire types at compile time.
+template <typename T>
+struct TypeOf {
+  static const TypeCode code = (sizeof(T) == 1)   ? ((T)(-1) < (T)0 ? kI8 : kU8)
+                               : (sizeof(T) == 2) ? ((T)(-1) < (T)0 ? kI16 : kU16)
+                               : (sizeof(T) == 4) ? ((T)(-1) < (T)0 ? kI32 : kU32)
+                                                  : kVoid;
+};
+template <>
+struct TypeOf<bool> {
+  static const TypeCode code = kBool;
+};
+template <>
+struct TypeOf<float> {
+  static const TypeCode code = kF32;
+};
+template <>
+struct TypeOf<double> {
+  static const TypeCode code = (sizeof(double) == 8) ? kF64 : kF32;
+};
+
+// A channel's value type as stored: scalar, fixed array (count > 0), string or struct.
+struct ValueType {
+  TypeCode code;
+  uint8_t count;  // array elements (0 = a single scalar), or string capacity
+  Text layout;    // struct fields
+
+  // Bytes of the value on the wire; for a string, its largest encoding (1 + capacity).
+  uint16_t wireSize() const;
+  // Bytes of the value in memory.
+  uint16_t memSize() const;
+  // Copies a value from memory to its wire form; returns the wire length.
+  uint16_t toWire(const void* mem, uint8_t* wire) const;
+  // Checks a wire value (length, bools, string length). kOk or an error code.
+  ErrorCode check(const uint8_t* wire, uint16_t len) const;
+  // Copies a checked wire value into memory.
+  void fromWire(const uint8_t* wire, uint16_t len, void* mem) const;
+};
+
+// Reads scalar i of a wire value as a double, for range checks (scalars and arrays).
+double scalarAsDouble(TypeCode t, const uint8_t* p);
+// Stores a double into one scalar in memory (used for failsafe values).
+void storeScalar(TypeCode t, double v, void* mem);
+
+// Walks a struct layout text "name:type[count],...". Returns false at the end or on a syntax error
+// (then ok is false).
+struct LayoutField {
+  uint16_t nameStart, nameLen;
+  TypeCode code;
+  uint8_t count;  // 0 = scalar
+};
+class LayoutReader {
+ public:
+  explicit LayoutReader(Text t) : ok(true), text_(t), pos_(0) {}
+  bool next(LayoutField& f);
+  bool ok;
+
+ private:
+  Text text_;
+  uint16_t pos_;
+};
+
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,93 @@
+// Test doubles for the core's seams, and a small "hub" that speaks frames to a Device.
+#ifndef HUBWIRE_TEST_FAKES_H
+#define HUBWIRE_TEST_FAKES_H
+
+#include <cstring>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "hubwire/port.h"
+#include "hubwire/wire/frame.h"
+
+namespace hubwire {
+namespace test {
+
+typedef std::vector<uint8_t> Bytes;
+
+class FakeStream : public ByteStream {
+ public:
+  int read() override {
+    if (in.empty()) return -1;
+    int c = in.front();
+    in.pop_front();
+    return c;
+  }
+  void write(const uint8_t* data, size_t len) override { out.insert(out.end(), data, data + len); }
+  size_t writable() override { return room; }
+
+  std::deque<uint8_t> in;  // bytes for the device to read
+  Bytes out;               // bytes the device wrote
+  size_t room = 4096;
+};
+
+class FakeClock : public Clock {
+ public:
+  uint32_t millis() override { return now; }
+  uint32_t now = 1000;
+};
+
+struct RxFrame {
+  uint8_t type, seq, id;
+  Bytes payload;
+};
+
+// Decodes everything the device wrote so far into frames (and clears it).
+inline std::vector<RxFrame> drain(FakeStream& s, LinkCounters* counters = nullptr) {
+  static uint8_t buf[HUBWIRE_RAW_FRAME_SIZE(255)];
+  FrameReceiver rx(buf, sizeof(buf));
+  std::vector<RxFrame> frames;
+  for (uint8_t b : s.out) {
+    if (rx.feed(b)) {
+      const Frame& f = rx.frame();
+      frames.push_back(RxFrame{f.type, f.seq, f.id, Bytes(f.payload, f.payload + f.len)});
+    }
+  }
+  if (counters) *counters = rx.counters;
+  s.out.clear();
+  return frames;
+}
+
+inline void sendFrame(FakeStream& s, uint8_t type, uint8_t seq, uint8_t id, const Bytes& payload = Bytes()) {
+  uint8_t out[300];
+  size_t n = encodeFrame(type, seq, id, payload.data(), (uint8_t)payload.size(), out);
+  s.in.insert(s.in.end(), out, out + n);
+}
+
+template <typename T>
+Bytes le(T v) {
+  Bytes b(sizeof(T));
+  std::memcpy(b.data(), &v, sizeof(T));
+  return b;
+}
+
+inline Bytes hex(const std::string& h) {
+  Bytes b;
+  for (size_t i = 0; i + 1 < h.size(); i += 2) b.push_back((uint8_t)std::stoul(h.substr(i, 2), nullptr, 16));
+  return b;
+}
+
+inline std::string toHex(const uint8_t* p, size_t n) {
+  static const char* d = "0123456789abcdef";
+  std::string s;
+  for (size_t i = 0; i < n; ++i) {
+    s += d[p[i] >> 4];
+    s += d[p[i] & 15];
+  }
+  return s;
+}
+
+}  // namespace test
+}  // namespace hubwire
+
+#endif

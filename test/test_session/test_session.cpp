@@ -1,0 +1,599 @@
+// The device session against a fake stream and a fake clock: every message kind, every NAK,
+// retries, duplicate suppression, link loss and failsafe, stream timing.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "fakes.h"
+#include "hubwire/session/device.h"
+#include "hubwire/wire/bytes.h"
+
+using namespace hubwire;
+using namespace hubwire::test;
+
+namespace {
+
+// The sketch under test: globals, because declarations are a plain function, as in a sketch.
+float speed;
+int16_t counts[3];
+char label[9] = "hi";
+struct Pose {
+  float x;
+  uint8_t ok;
+  int16_t t[2];
+} pose;
+uint32_t hidden;
+bool lamp;
+Event<uint16_t> alarm;
+int ledCalls, pingCalls, lostCalls, upCalls, changes;
+uint8_t lastLed;
+
+void setLed(uint8_t v) {
+  lastLed = v;
+  ++ledCalls;
+}
+bool refuseOdd(uint16_t v) { return v % 2 == 0; }
+int32_t ping(int16_t v) {
+  ++pingCalls;
+  return v * 2;
+}
+void reset() { ++pingCalls; }
+void changed() { ++changes; }
+void lost() { ++lostCalls; }
+void up() { ++upCalls; }
+
+Device* dut;
+void declarations() {
+  dut->expose("speed", speed).writable().streamable().range(-1, 1).unit("m/s").failsafe(0).onChange(changed);  // 1
+  dut->expose("counts", counts).streamable();                                                                 // 2
+  dut->expose("label", label).writable().describe("a \"quoted\" label");                                      // 3
+  dut->expose("pose", pose, "x:f32,ok:u8,t:i16[2]").writable();                                              // 4
+  dut->control("led", setLed);                                                                                // 5
+  dut->control("even", refuseOdd);                                                                            // 6
+  dut->action("ping", ping);                                                                                  // 7
+  dut->action("reset", reset);                                                                                // 8
+  dut->event("alarm", alarm);                                                                                 // 9
+  dut->expose("lamp", lamp).writable().failsafe(1);                                                           // 10
+}
+
+const uint8_t kSpeed = 1, kCounts = 2, kLabel = 3, kPose = 4, kLed = 5, kEven = 6, kPing = 7, kReset = 8, kAlarm = 9,
+              kLamp = 10;
+
+uint32_t fnv(const std::string& s) {
+  uint32_t h = kFnvOffset;
+  for (unsigned char c : s) h = fnv1a(h, c);
+  return h;
+}
+
+Bytes hubHello(uint32_t nonce, uint8_t flags = 0, uint8_t version = 1, uint16_t beat = 250) {
+  Bytes p(16, 0);
+  p[0] = version;
+  p[1] = flags;
+  storeU32(&p[2], nonce);
+  storeU16(&p[6], 255);
+  storeU16(&p[8], beat);
+  return p;
+}
+
+class Session : public ::testing::Test {
+ protected:
+  FakeStream stream;
+  FakeClock clock;
+  Device device{stream, clock};
+  uint8_t seq = 0;
+  std::vector<RxFrame> others;  // frames sent in the same update() as the last answer
+  std::vector<RxFrame> linkFrames;
+
+  void SetUp() override {
+    dut = &device;
+    speed = 0;
+    lamp = false;
+    memset(counts, 0, sizeof(counts));
+    strcpy(label, "hi");
+    ledCalls = pingCalls = lostCalls = upCalls = changes = 0;
+    device.onLinkLost(lost);
+    device.onLinkUp(up);
+    ASSERT_TRUE(device.begin("tester", declarations, "2.1", 0xABCDEF01));
+  }
+
+  std::vector<RxFrame> pump(uint32_t advanceMs = 0) {
+    clock.now += advanceMs;
+    device.update();
+    return drain(stream);
+  }
+
+  void link(uint32_t nonce = 77) {
+    drain(stream);
+    sendFrame(stream, '*', 0, 0, hubHello(nonce));
+    linkFrames = pump();
+    ASSERT_TRUE(device.linked());
+    ASSERT_FALSE(linkFrames.empty());
+    EXPECT_EQ(linkFrames[0].type, '*');
+  }
+
+  // Sends a transaction with a fresh seq and returns the answer (the first frame echoing it).
+  RxFrame transact(uint8_t type, uint8_t id, const Bytes& payload = Bytes(), int useSeq = -1) {
+    uint8_t s = useSeq >= 0 ? (uint8_t)useSeq : ++seq;
+    sendFrame(stream, type, s, id, payload);
+    others.clear();
+    RxFrame answer{0, 0, 0, {}};
+    bool found = false;
+    for (auto& f : pump()) {
+      if (!found && f.seq == s && f.id == id && f.type != 'H' && f.type != '!' && f.type != 'D') {
+        answer = f;
+        found = true;
+      } else {
+        others.push_back(f);
+      }
+    }
+    if (found) return answer;
+    ADD_FAILURE() << "no answer to " << type;
+    return RxFrame{0, 0, 0, {}};
+  }
+
+  void expectNak(const RxFrame& f, uint8_t code) {
+    EXPECT_EQ(f.type, kMsgNak);
+    ASSERT_EQ(f.payload.size(), 1u);
+    EXPECT_EQ(f.payload[0], code);
+  }
+
+  std::string descriptor() {
+    std::string out;
+    for (;;) {
+      Bytes req(3);
+      storeU16(&req[0], (uint16_t)out.size());
+      req[2] = 255;
+      RxFrame f = transact('J', 0, req);
+      EXPECT_EQ(f.type, 'J');
+      EXPECT_EQ(loadU16(&f.payload[0]), out.size());
+      uint16_t total = loadU16(&f.payload[2]);
+      out.append(f.payload.begin() + 4, f.payload.end());
+      if (out.size() >= total || f.payload.size() == 4) return out;
+    }
+  }
+};
+
+TEST_F(Session, AnnouncesItselfAtBootWithHashAndLength) {
+  auto f = drain(stream);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].type, '*');
+  ASSERT_EQ(f[0].payload.size(), 16u);
+  EXPECT_EQ(f[0].payload[0], 1);
+  EXPECT_EQ(f[0].payload[1] & (kHelloDevice | kHelloReply), kHelloDevice);
+  EXPECT_EQ(loadU32(&f[0].payload[2]), 0xABCDEF01u);
+  EXPECT_EQ(loadU16(&f[0].payload[6]), HUBWIRE_MAX_PAYLOAD);
+  EXPECT_EQ(loadU16(&f[0].payload[8]), HUBWIRE_HEARTBEAT_MS);
+  EXPECT_EQ(loadU32(&f[0].payload[10]), device.descriptorHash());
+  EXPECT_EQ(loadU16(&f[0].payload[14]), device.descriptorLength());
+  EXPECT_FALSE(device.linked());
+}
+
+TEST_F(Session, RepeatsAnnouncementWhileUnlinked) {
+  drain(stream);
+  EXPECT_TRUE(pump(HUBWIRE_ANNOUNCE_MS - 1).empty());
+  auto f = pump(1);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].type, '*');
+}
+
+TEST_F(Session, HandshakeAnswersHelloAndLinks) {
+  link();
+  EXPECT_EQ(upCalls, 1);
+  sendFrame(stream, '*', 0, 0, hubHello(77, kHelloReply));  // a reply hello is not answered
+  for (auto& f : pump()) EXPECT_NE(f.type, '*');
+}
+
+TEST_F(Session, RefusesOtherProtocolVersionsButStillSaysWhoItIs) {
+  drain(stream);
+  sendFrame(stream, '*', 0, 0, hubHello(5, 0, 2));
+  auto f = pump();
+  ASSERT_FALSE(f.empty());
+  EXPECT_EQ(f[0].type, '*');
+  EXPECT_FALSE(device.linked());
+}
+
+TEST_F(Session, ShortHelloIsNakedBadLength) {
+  drain(stream);
+  sendFrame(stream, '*', 0, 0, Bytes(15, 1));
+  auto f = pump();
+  ASSERT_EQ(f.size(), 1u);
+  expectNak(f[0], kErrBadLength);
+  EXPECT_FALSE(device.linked());
+}
+
+TEST_F(Session, DescriptorIsValidJsonMatchingHashAndDeclarations) {
+  link();
+  std::string d = descriptor();
+  EXPECT_EQ(d.size(), device.descriptorLength());
+  EXPECT_EQ(fnv(d), device.descriptorHash());
+  auto j = nlohmann::json::parse(d);
+  EXPECT_EQ(j["p"], 1);
+  EXPECT_EQ(j["n"], "tester");
+  EXPECT_EQ(j["fw"], "2.1");
+  ASSERT_EQ(j["ch"].size(), 10u);
+  auto s = j["ch"][0];
+  EXPECT_EQ(s["id"], 1);
+  EXPECT_EQ(s["n"], "speed");
+  EXPECT_EQ(s["a"], "rws");
+  EXPECT_EQ(s["t"], "f32");
+  EXPECT_EQ(s["u"], "m/s");
+  EXPECT_EQ(s["min"], -1);
+  EXPECT_EQ(s["max"], 1);
+  EXPECT_EQ(s["fs"], 0);
+  EXPECT_EQ(j["ch"][1]["t"], "i16");
+  EXPECT_EQ(j["ch"][1]["c"], 3);
+  EXPECT_EQ(j["ch"][2]["t"], "str");
+  EXPECT_EQ(j["ch"][2]["c"], 8);
+  EXPECT_EQ(j["ch"][2]["d"], "a \"quoted\" label");
+  auto p = j["ch"][3];
+  EXPECT_EQ(p["t"], "struct");
+  EXPECT_EQ(p["f"], nlohmann::json::parse(R"([{"n":"x","t":"f32"},{"n":"ok","t":"u8"},{"n":"t","t":"i16","c":2}])"));
+  EXPECT_EQ(j["ch"][4]["a"], "w");
+  EXPECT_EQ(j["ch"][4]["t"], "u8");
+  EXPECT_EQ(j["ch"][6]["a"], "c");
+  EXPECT_EQ(j["ch"][6]["t"], "i16");
+  EXPECT_EQ(j["ch"][6]["rt"], "i32");
+  EXPECT_EQ(j["ch"][7]["t"], "void");
+  EXPECT_FALSE(j["ch"][7].contains("rt"));
+  EXPECT_EQ(j["ch"][8]["a"], "e");
+  EXPECT_EQ(j["ch"][8]["t"], "u16");
+}
+
+TEST_F(Session, ChunksRespectTheWantedSizeAndOffsets) {
+  link();
+  Bytes req(3);
+  storeU16(&req[0], 5);
+  req[2] = 7;
+  RxFrame f = transact('J', 0, req);
+  ASSERT_EQ(f.type, 'J');
+  EXPECT_EQ(f.payload.size(), 4u + 7u);
+  storeU16(&req[0], device.descriptorLength());
+  f = transact('J', 0, req);
+  EXPECT_EQ(f.payload.size(), 4u);  // offset == total: empty chunk
+  storeU16(&req[0], (uint16_t)(device.descriptorLength() + 1));
+  expectNak(transact('J', 0, req), kErrBadOffset);
+  expectNak(transact('J', 0, Bytes(2)), kErrBadLength);
+}
+
+TEST_F(Session, TransactionsBeforeHandshakeAreNakedNotLinked) {
+  drain(stream);
+  expectNak(transact('R', kSpeed), kErrNotLinked);
+  expectNak(transact('C', kSpeed, le<float>(0.5f)), kErrNotLinked);
+  EXPECT_EQ(speed, 0);
+}
+
+TEST_F(Session, ReadReturnsValuesOfEveryShape) {
+  link();
+  speed = 0.25f;
+  RxFrame f = transact('R', kSpeed);
+  EXPECT_EQ(f.type, 'r');
+  EXPECT_EQ(f.payload, le<float>(0.25f));
+  counts[0] = -1;
+  counts[2] = 300;
+  f = transact('R', kCounts);
+  EXPECT_EQ(toHex(f.payload.data(), f.payload.size()), "ffff00002c01");
+  f = transact('R', kLabel);
+  EXPECT_EQ(toHex(f.payload.data(), f.payload.size()), "026869");
+  pose.x = 1.0f;
+  pose.ok = 1;
+  pose.t[0] = 2;
+  pose.t[1] = -2;
+  f = transact('R', kPose);
+  EXPECT_EQ(toHex(f.payload.data(), f.payload.size()), "0000803f010200feff");  // packed, no padding
+}
+
+TEST_F(Session, ReadErrors) {
+  link();
+  expectNak(transact('R', 99), kErrUnknownChannel);
+  expectNak(transact('R', 0), kErrUnknownChannel);
+  expectNak(transact('R', kLed), kErrNotReadable);
+  expectNak(transact('R', kSpeed, Bytes(1)), kErrBadLength);
+}
+
+TEST_F(Session, WriteStoresCallsBackAndAcks) {
+  link();
+  RxFrame f = transact('C', kSpeed, le<float>(-0.5f));
+  EXPECT_EQ(f.type, kMsgAck);
+  EXPECT_TRUE(f.payload.empty());
+  EXPECT_EQ(speed, -0.5f);
+  EXPECT_EQ(changes, 1);
+  EXPECT_EQ(transact('C', kLabel, hex("03616263")).type, kMsgAck);
+  EXPECT_STREQ(label, "abc");
+  EXPECT_EQ(transact('C', kPose, hex("0000004001050006ff")).type, kMsgAck);
+  EXPECT_EQ(pose.x, 2.0f);
+  EXPECT_EQ(pose.t[0], 5);
+  EXPECT_EQ(pose.t[1], (int16_t)0xFF06);
+}
+
+TEST_F(Session, WriteErrorsLeaveTheValueAlone) {
+  link();
+  speed = 0.1f;
+  expectNak(transact('C', kSpeed, le<float>(1.5f)), kErrOutOfRange);
+  expectNak(transact('C', kSpeed, Bytes(3)), kErrBadLength);
+  expectNak(transact('C', kCounts, Bytes(6)), kErrNotWritable);
+  expectNak(transact('C', 77, Bytes(1)), kErrUnknownChannel);
+  expectNak(transact('C', kLamp, Bytes(1, 2)), kErrBadValue);
+  expectNak(transact('C', kLabel, hex("09414141414141414141")), kErrBadValue);  // 9 > capacity 8
+  expectNak(transact('C', kLabel, hex("0341")), kErrBadLength);
+  EXPECT_EQ(speed, 0.1f);
+  EXPECT_EQ(changes, 0);
+}
+
+TEST_F(Session, ControlCallsTheFunctionAndMayRefuse) {
+  link();
+  EXPECT_EQ(transact('C', kLed, Bytes(1, 9)).type, kMsgAck);
+  EXPECT_EQ(lastLed, 9);
+  EXPECT_EQ(transact('C', kEven, le<uint16_t>(4)).type, kMsgAck);
+  expectNak(transact('C', kEven, le<uint16_t>(5)), kErrRejected);
+}
+
+TEST_F(Session, ActionsReturnValuesOrAck) {
+  link();
+  RxFrame f = transact('C', kPing, le<int16_t>(-21));
+  EXPECT_EQ(f.type, 'r');
+  EXPECT_EQ(f.payload, le<int32_t>(-42));
+  EXPECT_EQ(transact('C', kReset).type, kMsgAck);
+  EXPECT_EQ(pingCalls, 2);
+  expectNak(transact('C', kPing, Bytes(1)), kErrBadLength);
+  expectNak(transact('R', kPing), kErrNotReadable);
+}
+
+TEST_F(Session, RetriedControlIsAnsweredAgainButAppliedOnce) {
+  link();
+  RxFrame a = transact('C', kPing, le<int16_t>(5), 40);
+  RxFrame b = transact('C', kPing, le<int16_t>(5), 40);
+  EXPECT_EQ(pingCalls, 1);
+  EXPECT_EQ(a.type, b.type);
+  EXPECT_EQ(a.payload, b.payload);
+  transact('C', kSpeed, le<float>(0.5f), 41);
+  transact('C', kSpeed, le<float>(0.5f), 41);
+  EXPECT_EQ(changes, 1);
+  // The NAK of a refused control is remembered as well.
+  expectNak(transact('C', kEven, le<uint16_t>(3), 42), kErrRejected);
+  expectNak(transact('C', kEven, le<uint16_t>(3), 42), kErrRejected);
+}
+
+TEST_F(Session, SameSeqAfterAnotherTransactionIsANewControl) {
+  link();
+  transact('C', kPing, le<int16_t>(1), 50);
+  transact('R', kSpeed, Bytes(), 51);
+  transact('C', kPing, le<int16_t>(1), 50);
+  EXPECT_EQ(pingCalls, 2);
+}
+
+TEST_F(Session, NewHubSessionForgetsDuplicates) {
+  link(1);
+  transact('C', kPing, le<int16_t>(1), 60);
+  link(2);
+  transact('C', kPing, le<int16_t>(1), 60);
+  EXPECT_EQ(pingCalls, 2);
+}
+
+TEST_F(Session, HeartbeatsCarryCounterIntervalAndErrorCounters) {
+  link();  // the first heartbeat goes out with the hello
+  auto f = linkFrames;
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[1].type, 'H');
+  f.erase(f.begin());
+  EXPECT_EQ(loadU16(&f[0].payload[0]), 1);
+  EXPECT_EQ(loadU16(&f[0].payload[2]), 0);
+  stream.in.push_back(0x05);  // garbage: one dropped frame
+  stream.in.push_back(0x00);
+  sendFrame(stream, 'H', 0, 0, Bytes(10));
+  EXPECT_TRUE(pump(HUBWIRE_HEARTBEAT_MS - 1).empty());
+  f = pump(1);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].seq, 2);
+  EXPECT_EQ(loadU16(&f[0].payload[0]), 2);
+  EXPECT_EQ(loadU16(&f[0].payload[2]), HUBWIRE_HEARTBEAT_MS);
+  EXPECT_EQ(loadU16(&f[0].payload[8]), 1);  // dropped
+}
+
+TEST_F(Session, SilenceLosesTheLinkAppliesFailsafesAndCallsTheHook) {
+  link();
+  transact('C', kSpeed, le<float>(0.75f));
+  transact('C', kLamp, Bytes(1, 0));
+  pump(999);
+  EXPECT_TRUE(device.linked());
+  sendFrame(stream, 'H', 0, 0, Bytes(10));  // any frame keeps it alive
+  pump(500);
+  pump(500);
+  EXPECT_TRUE(device.linked());
+  pump(500);
+  EXPECT_FALSE(device.linked());
+  EXPECT_EQ(lostCalls, 1);
+  EXPECT_EQ(speed, 0.0f);
+  EXPECT_TRUE(lamp);
+  // The hub's next heartbeat gets a hello back, inviting it to handshake again.
+  sendFrame(stream, 'H', 0, 0, Bytes(10));
+  auto f = pump();
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].type, '*');
+  EXPECT_EQ(f[0].payload[1] & kHelloReply, 0);
+  expectNak(transact('R', kSpeed), kErrNotLinked);
+  link();
+  EXPECT_EQ(upCalls, 2);
+}
+
+TEST_F(Session, LinkLossTimeoutFollowsTheHubsHeartbeat) {
+  drain(stream);
+  sendFrame(stream, '*', 0, 0, hubHello(3, 0, 1, 100));
+  pump();
+  pump(399);
+  EXPECT_TRUE(device.linked());
+  pump(1);
+  EXPECT_FALSE(device.linked());
+}
+
+TEST_F(Session, EventsAreRetriedWithTheSameSeqUntilAcked) {
+  link();
+  pump();  // first heartbeat
+  EXPECT_TRUE(device.emit(alarm, 513));
+  auto f = pump();
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].type, '!');
+  EXPECT_EQ(f[0].id, kAlarm);
+  EXPECT_EQ(f[0].payload, le<uint16_t>(513));
+  uint8_t first = f[0].seq;
+  EXPECT_TRUE(pump(HUBWIRE_EVENT_RETRY_MS - 1).empty());
+  f = pump(1);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].seq, first);
+  sendFrame(stream, kMsgAck, (uint8_t)(first + 1), kAlarm);  // wrong seq: ignored
+  pump();
+  EXPECT_EQ(device.eventsQueued(), 1);
+  sendFrame(stream, kMsgAck, first, kAlarm);
+  pump();
+  EXPECT_EQ(device.eventsQueued(), 0);
+  EXPECT_TRUE(pump(HUBWIRE_EVENT_RETRY_MS).size() <= 1);  // at most a heartbeat
+  device.emit(alarm, 1);
+  f = pump();
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].seq, (uint8_t)(first + 1));
+}
+
+TEST_F(Session, EventsWaitForTheLinkAndTheQueueHasALimit) {
+  drain(stream);
+  for (int i = 0; i < HUBWIRE_EVENT_QUEUE; ++i) EXPECT_TRUE(device.emit(alarm, (uint16_t)i));
+  EXPECT_FALSE(device.emit(alarm, 99));
+  EXPECT_TRUE(pump().empty());  // not linked: kept, not sent
+  link();
+  std::vector<uint16_t> got;
+  std::vector<RxFrame> frames = linkFrames;  // the first event leaves right after the hello
+  for (int i = 0; i < 10 && got.size() < HUBWIRE_EVENT_QUEUE; ++i) {
+    for (auto& f : frames) {
+      if (f.type != '!') continue;
+      got.push_back(loadU16(f.payload.data()));
+      sendFrame(stream, kMsgAck, f.seq, f.id);
+    }
+    frames = pump(1);
+  }
+  EXPECT_EQ(got, (std::vector<uint16_t>{0, 1, 2, 3}));
+}
+
+TEST_F(Session, NakedEventIsNotRetried) {
+  link();
+  device.emit(alarm, 7);
+  auto f = pump();
+  uint8_t s = 0;
+  for (auto& x : f)
+    if (x.type == '!') s = x.seq;
+  sendFrame(stream, kMsgNak, s, kAlarm, Bytes(1, kErrUnknownChannel));
+  pump();
+  EXPECT_EQ(device.eventsQueued(), 0);
+}
+
+TEST_F(Session, SubscribeStreamsSamplesAtTheGrantedInterval) {
+  link();
+  pump();
+  RxFrame ack = transact('S', kSpeed, le<uint16_t>(50));
+  EXPECT_EQ(ack.type, kMsgAck);
+  EXPECT_EQ(ack.payload, le<uint16_t>(50));
+  speed = 0.5f;
+  std::vector<RxFrame> samples;
+  for (auto& f : others)  // the first sample leaves with the ACK
+    if (f.type == 'D') samples.push_back(f);
+  for (int ms = 0; ms < 160; ++ms)
+    for (auto& f : pump(1))
+      if (f.type == 'D') samples.push_back(f);
+  ASSERT_EQ(samples.size(), 4u);  // at 0, 50, 100, 150 ms
+  EXPECT_EQ(samples[0].id, kSpeed);
+  EXPECT_EQ(loadU16(&samples[0].payload[0]), 0);
+  EXPECT_EQ(loadU16(&samples[1].payload[0]), 50);
+  EXPECT_EQ(samples[1].seq, (uint8_t)(samples[0].seq + 1));
+  EXPECT_EQ(Bytes(samples[2].payload.begin() + 2, samples[2].payload.end()), le<float>(0.5f));
+  // Cancel.
+  EXPECT_EQ(transact('S', kSpeed, le<uint16_t>(0)).payload, le<uint16_t>(0));
+  for (int ms = 0; ms < 100; ++ms)
+    for (auto& f : pump(1)) EXPECT_NE(f.type, 'D');
+}
+
+TEST_F(Session, SubscribeClampsChecksAndRunsOutOfSlots) {
+  link();
+  EXPECT_EQ(transact('S', kSpeed, le<uint16_t>(1)).payload, le<uint16_t>(HUBWIRE_MIN_STREAM_INTERVAL_MS));
+  expectNak(transact('S', kLabel, le<uint16_t>(100)), kErrNotStreamable);
+  expectNak(transact('S', 99, le<uint16_t>(100)), kErrUnknownChannel);
+  expectNak(transact('S', kCounts, Bytes(1)), kErrBadLength);
+  EXPECT_EQ(transact('S', kCounts, le<uint16_t>(100)).type, kMsgAck);
+#if HUBWIRE_MAX_STREAMS == 2
+  // A third channel would need a third slot; re-subscribing an active one does not.
+  EXPECT_EQ(transact('S', kSpeed, le<uint16_t>(30)).type, kMsgAck);
+#endif
+}
+
+TEST_F(Session, SamplesWaitForRoomInTheOutputBuffer) {
+  link();
+  pump();
+  transact('S', kSpeed, le<uint16_t>(20));
+  stream.room = 5;
+  for (auto& f : pump(1)) EXPECT_NE(f.type, 'D');
+  for (auto& f : pump(30)) EXPECT_NE(f.type, 'D');  // due, but no room
+  stream.room = 4096;
+  bool got = false;
+  for (auto& f : pump(1)) got |= f.type == 'D';
+  EXPECT_TRUE(got);
+}
+
+TEST_F(Session, StreamsEndWithTheLink) {
+  link();
+  transact('S', kSpeed, le<uint16_t>(20));
+  pump(2000);
+  link();
+  for (int ms = 0; ms < 100; ++ms)
+    for (auto& f : pump(1)) EXPECT_NE(f.type, 'D');
+}
+
+TEST_F(Session, UnknownMessageTypeIsNaked) {
+  link();
+  expectNak(transact('Z', 1), kErrUnknownType);
+  expectNak(transact('r', 1), kErrUnknownType);
+}
+
+// ---- declaration errors ----
+
+Device* bad;
+void badName() { bad->expose("9lives", speed); }
+void dupName() {
+  bad->expose("a", speed);
+  bad->expose("b", lamp);
+  bad->expose("a", hidden);
+}
+void badLayout() { bad->expose("p", pose, "x:f32,ok:u8"); }  // misses t:i16[2]
+void badSyntax() { bad->expose("p", pose, "x:f32,ok:u9,t:i16[2]"); }
+uint8_t big[HUBWIRE_MAX_PAYLOAD];
+void badLayoutFree() { bad->expose("fine", speed); }
+void tooBig() { bad->expose("big", big); }
+
+TEST(Declarations, ErrorsAreReportedWithTheChannel) {
+  FakeStream s;
+  FakeClock c;
+  Device d(s, c);
+  bad = &d;
+  struct Case {
+    void (*fn)();
+    SetupError err;
+    uint8_t channel;
+  } cases[] = {{badName, kSetupBadName, 1},    {dupName, kSetupBadName, 3}, {badLayout, kSetupBadLayout, 1},
+               {badSyntax, kSetupBadLayout, 1}, {tooBig, kSetupTooLarge, 1}};
+  for (auto& k : cases) {
+    EXPECT_FALSE(d.begin("x", k.fn));
+    EXPECT_EQ(d.error(), k.err);
+    EXPECT_EQ(d.errorChannel(), k.channel);
+  }
+  EXPECT_FALSE(d.begin("x", nullptr));
+  EXPECT_EQ(d.error(), kSetupNoDeclarations);
+  EXPECT_FALSE(d.begin("bad name", tooBig));
+  EXPECT_EQ(d.error(), kSetupTooLarge);
+  EXPECT_FALSE(d.begin("bad name", badLayoutFree));
+  EXPECT_EQ(d.error(), kSetupBadName);
+  s.out.clear();
+  d.update();
+  EXPECT_TRUE(s.out.empty());  // a device that failed begin() stays silent
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs everything the build, the tests and the demo need on Debian / Ubuntu / Raspberry Pi OS:
+# Debian packages (only those missing) and a Python venv in .venv with the hub and test tools.
+# Safe to run again: it does nothing that is already done.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  make cmake g++ pkg-config git
+  googletest libgtest-dev nlohmann-json3-dev           # C++ unit tests
+  gcc-avr avr-libc binutils-avr arduino-core-avr arduino-builder arduino-ctags  # Uno/Mega/Leonardo builds
+  simavr libsimavr-dev libsimavrparts1 libelf-dev      # the simulated Uno
+  gcc-arm-none-eabi libnewlib-arm-none-eabi            # 32-bit (Cortex-M) compile checks
+  python3 python3-venv python3-pip
+)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  echo "setup: creating .venv"
+  python3 -m venv .venv
+fi
+stamp=.venv/.hubwire-installed
+if [ ! -f "$stamp" ] || [ host/pyproject.toml -nt "$stamp" ]; then
+  .venv/bin/pip install -q --upgrade pip
+  .venv/bin/pip install -q -e "host[test]" platformio
+  touch "$stamp"
+fi
