@@ -318,6 +318,39 @@ def test_stream_generator_loop_and_break(rover: Any) -> None:
         if n == 3:
             break
     assert n == 3
+    # the abandoned stream unsubscribed itself (without waiting for the ACK)
+    assert rover.session._subs == {}
+    with rover.stream("battery", hz=100, timeout=2) as st:  # and the device accepts a new one
+        assert isinstance(next(st), int)
+
+
+def test_concurrent_calls_from_many_threads(rover: Any) -> None:
+    errors: List[BaseException] = []
+
+    def reader() -> None:
+        try:
+            for _ in range(30):
+                assert rover.battery > 0
+                assert len(rover.range) == 4
+        except BaseException as e:  # noqa: BLE001
+            errors.append(e)
+
+    def writer(name: str, value: float) -> None:
+        try:
+            for i in range(20):
+                rover.write(name, value if i % 2 else -value)
+        except BaseException as e:  # noqa: BLE001
+            errors.append(e)
+
+    threads = [threading.Thread(target=reader) for _ in range(3)]
+    threads += [threading.Thread(target=writer, args=("left", 0.5)), threading.Thread(target=writer, args=("right", 0.25))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(30)
+    assert errors == []
+    assert rover.applied == 40
+    assert (rover.left, rover.right) == (0.5, 0.25)
 
 
 # ------------------------------------------------------------------------------------ link loss
@@ -384,6 +417,7 @@ def test_device_restart_mid_session(rover: Any, emulator: Emulator) -> None:
     assert got == [("rover", 0)]  # a fresh device: nothing restored by the hub
     assert rover.session.device_hello.nonce != old_nonce
     assert rover.session.stats["reboots"] == 1
+    assert rover.session.stats["port_reopens"] >= 1  # the pty vanished and came back
     assert rover.session.stats["chunk_requests"] == chunks  # same descriptor: not downloaded again
     assert rover.left == 0.0
     rover.left = 0.25

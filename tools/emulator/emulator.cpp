@@ -32,7 +32,8 @@ void onBumper(int) { bumperToggles = bumperToggles + 1; }
 uint64_t nowUs() {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
-  return (uint64_t)(t.tv_sec - started.tv_sec) * 1000000u + (uint64_t)(t.tv_nsec - started.tv_nsec) / 1000;
+  int64_t ns = (int64_t)(t.tv_sec - started.tv_sec) * 1000000000 + (t.tv_nsec - started.tv_nsec);
+  return (uint64_t)(ns / 1000);
 }
 }  // namespace
 
