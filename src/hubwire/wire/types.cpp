@@ -207,6 +207,20 @@ void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
   }
 }
 
+namespace {
+template <typename T>
+double readAs(const uint8_t* p) {
+  T v;
+  memcpy(&v, p, sizeof(T));
+  return (double)v;
+}
+template <typename T>
+void writeAs(double d, void* mem) {
+  T v = (T)d;
+  memcpy(mem, &v, sizeof(T));
+}
+}  // namespace
+
 double scalarAsDouble(TypeCode t, const uint8_t* p) {
   switch (t) {
     case kBool:
@@ -214,36 +228,18 @@ double scalarAsDouble(TypeCode t, const uint8_t* p) {
       return p[0];
     case kI8:
       return (int8_t)p[0];
-    case kU16: {
-      uint16_t v;
-      memcpy(&v, p, 2);
-      return v;
-    }
-    case kI16: {
-      int16_t v;
-      memcpy(&v, p, 2);
-      return v;
-    }
-    case kU32: {
-      uint32_t v;
-      memcpy(&v, p, 4);
-      return (double)v;
-    }
-    case kI32: {
-      int32_t v;
-      memcpy(&v, p, 4);
-      return (double)v;
-    }
-    case kF32: {
-      float v;
-      memcpy(&v, p, 4);
-      return v;
-    }
-    case kF64: {
-      double v;
-      memcpy(&v, p, sizeof(double));
-      return v;
-    }
+    case kU16:
+      return readAs<uint16_t>(p);
+    case kI16:
+      return readAs<int16_t>(p);
+    case kU32:
+      return readAs<uint32_t>(p);
+    case kI32:
+      return readAs<int32_t>(p);
+    case kF32:
+      return readAs<float>(p);
+    case kF64:
+      return readAs<double>(p);
     default:
       return 0;
   }
@@ -255,38 +251,28 @@ void storeScalar(TypeCode t, double v, void* mem) {
       *(uint8_t*)mem = v != 0;
       break;
     case kU8:
-      *(uint8_t*)mem = (uint8_t)v;
+      writeAs<uint8_t>(v, mem);
       break;
     case kI8:
-      *(int8_t*)mem = (int8_t)v;
+      writeAs<int8_t>(v, mem);
       break;
-    case kU16: {
-      uint16_t x = (uint16_t)v;
-      memcpy(mem, &x, 2);
+    case kU16:
+      writeAs<uint16_t>(v, mem);
       break;
-    }
-    case kI16: {
-      int16_t x = (int16_t)v;
-      memcpy(mem, &x, 2);
+    case kI16:
+      writeAs<int16_t>(v, mem);
       break;
-    }
-    case kU32: {
-      uint32_t x = (uint32_t)v;
-      memcpy(mem, &x, 4);
+    case kU32:
+      writeAs<uint32_t>(v, mem);
       break;
-    }
-    case kI32: {
-      int32_t x = (int32_t)v;
-      memcpy(mem, &x, 4);
+    case kI32:
+      writeAs<int32_t>(v, mem);
       break;
-    }
-    case kF32: {
-      float x = (float)v;
-      memcpy(mem, &x, 4);
+    case kF32:
+      writeAs<float>(v, mem);
       break;
-    }
     case kF64:
-      memcpy(mem, &v, sizeof(double));
+      writeAs<double>(v, mem);
       break;
     default:
       break;

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Uno flash/SRAM of the examples over a sketch that only echoes Serial bytes (avr-size on
+# arduino-builder output), and whether malloc is linked at all. Writes bench/FOOTPRINT.md.
+#
+#   bash bench/footprint.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=build/footprint
+size_of() {  # sketch dir -> "flash sram heap"
+  local dir=$1 name
+  name=$(basename "$dir")
+  rm -rf "$out/$name"
+  bash tools/arduino/build-sketch.sh "$dir" arduino:avr:uno "$out/$name" >/dev/null
+  local elf=$out/$name/$name.ino.elf
+  local text data bss heap
+  text=$(avr-size -A "$elf" | awk '$1==".text"{print $2}')
+  data=$(avr-size -A "$elf" | awk '$1==".data"{print $2}')
+  bss=$(avr-size -A "$elf" | awk '$1==".bss"{print $2}')
+  if avr-nm "$elf" | grep -qw malloc; then heap=yes; else heap=no; fi
+  echo "$((text + data)) $((data + bss)) $heap"
+}
+read -r bf bs _ < <(size_of bench/footprint/SerialEcho)
+{
+  echo "# Footprint on the Uno (ATmega328P)"
+  echo
+  echo "Measured by \`bash bench/footprint.sh\` with $(avr-gcc --version | head -1), Arduino AVR core"
+  echo "$(dpkg-query -W -f='${Version}' arduino-core-avr 2>/dev/null || echo '?'), on $(date -u +%Y-%m-%d)."
+  echo "flash = .text + .data, static SRAM = .data + .bss (avr-size -A). Baseline: bench/footprint/SerialEcho"
+  echo "(flash $bf B, SRAM $bs B). Default settings (src/hubwire/config.h)."
+  echo
+  echo "| sketch | flash | SRAM | flash over baseline | SRAM over baseline | target | malloc linked |"
+  echo "| --- | --- | --- | --- | --- | --- | --- |"
+  for s in Minimal:2560:200 Rover:4096:350; do
+    IFS=: read -r name tf ts <<<"$s"
+    read -r f r heap < <(size_of "examples/$name")
+    df=$((f - bf)); ds=$((r - bs))
+    verdict="met"
+    if [ $df -gt "$tf" ] || [ $ds -gt "$ts" ]; then verdict="**missed**"; fi
+    echo "| $name | $f | $r | +$df | +$ds | +$tf / +$ts: $verdict | $heap |"
+  done
+} > bench/FOOTPRINT.md
+cat bench/FOOTPRINT.md
