@@ -47,13 +47,15 @@ class ArduinoPorts : public ByteStream, public Clock {
     return reportsRoom_ ? (size_t)n : (size_t)0xFFFF;
   }
   uint32_t millis() override { return ::millis(); }
+  uint32_t micros() override { return ::micros(); }
 
  protected:
   Stream& stream_;
   bool reportsRoom_;
 };
 
-// Different on every boot: the hub learns from a new nonce that the board rebooted.
+// Seeds the session nonce: differs between resets (a counter that survives them) and, where the
+// board has one, comes from a hardware RNG. See Device::begin().
 uint32_t bootNonce();
 
 }  // namespace hubwire

@@ -16,7 +16,7 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 from .errors import DescriptorError, InvalidValue
 from .wire.frame import PROTOCOL_MAX_PAYLOAD
 from .wire.messages import PROTOCOL_VERSION, fnv1a32
-from .wire.values import NUMERIC_TYPES, SCALARS, INTEGER_TYPES, Codec, codec_for, type_name
+from .wire.values import INTEGER_TYPES, NUMERIC_TYPES, SCALARS, Codec, codec_for
 
 __all__ = ["MAX_DESCRIPTOR_SIZE", "MAX_DEPTH", "Channel", "Descriptor", "parse_descriptor"]
 
@@ -361,9 +361,14 @@ def _parse_channel(i: int, ch: Any) -> Channel:
             raise _fail(where, "a failsafe value 'fs' is only for readable/writable channels")
         raw_fs = ch["fs"]
         try:
-            if codec.kind == "scalar" and codec.scalar == "bool" and _is_int(raw_fs):
-                raw_fs = bool(raw_fs) if raw_fs in (0, 1) else raw_fs
-            fs = codec.check(codec.from_json(raw_fs))
+            value: Any = raw_fs
+            if _is_num(value) or isinstance(value, bool):
+                # a single number for an array or struct sets every element (as a device may write it)
+                if codec.kind == "array":
+                    value = [value] * codec.count  # type: ignore[attr-defined]
+                elif codec.kind == "struct":
+                    value = {f["n"]: ([value] * f["c"] if "c" in f else value) for f in type_obj["f"]}
+            fs = codec.check(codec.from_json(value))
         except (InvalidValue, TypeError) as e:
             raise _fail(where, f"failsafe 'fs' {json.dumps(raw_fs)[:40]} does not fit {codec.name}: {e}") from None
     return Channel(id=cid, name=name, access=a, codec=codec, type=type_obj, unit=unit,
@@ -407,8 +412,8 @@ def parse_descriptor(data: Union[bytes, bytearray, str]) -> Descriptor:
     if p != PROTOCOL_VERSION:
         raise _fail("", f"protocol version 'p' is {p}, this hub reads version {PROTOCOL_VERSION}")
     name = doc.get("n")
-    if not isinstance(name, str) or not name or len(name) > 64:
-        raise _fail("", f"device name 'n' must be a string of 1..64 characters, got {json.dumps(name)[:70]}")
+    if not isinstance(name, str):
+        raise _fail("", f"device name 'n' must be a string, got {json.dumps(name)[:70]}")
     fw = doc.get("fw")
     if fw is not None and not isinstance(fw, str):
         raise _fail("", f"firmware version 'fw' must be a string, got {json.dumps(fw)}")

@@ -6,8 +6,8 @@ import time
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError, LinkLost, NoDeviceFound, Timeout
-from .session import Event, LinkHealth, Session, State, StreamSample, _Subscription
+from .errors import HubwireError, NoDeviceFound, Timeout
+from .session import Event, LinkHealth, Session, StreamSample, _Subscription
 from .wire import messages as m
 
 __all__ = ["Device", "Stream", "EventStream", "connect", "find_port", "KNOWN_USB_VIDS"]
@@ -174,7 +174,7 @@ class EventStream:
         self._session = session
         self._names = set(names) if names else None
         self.timeout = timeout
-        self._q: Optional["queue.Queue[Event]"] = session.event_queue()
+        self._q: Optional["queue.Queue[Event]"] = session.event_queue(self._names)
 
     def get(self, timeout: Optional[float] = None) -> Optional[Event]:
         """Next event within ``timeout`` seconds (None: wait forever), or None."""

@@ -219,7 +219,8 @@ class Session:
         self.cache = DescriptorCache(cache_dir)
         self.progress = progress
         self._serial_kwargs = dict(serial_kwargs or {})
-        self.nonce = random.randrange(1, 1 << 32)
+        #: this hub session's nonce: random per connection, never 0 (os.urandom: distinct across forks)
+        self.nonce = int.from_bytes(os.urandom(4), "little") or 1
 
         self._lock = threading.RLock()
         self._cv = threading.Condition(self._lock)
@@ -257,6 +258,8 @@ class Session:
         self._subs: Dict[int, List[_Subscription]] = {}
         self._event_queues: List["queue.Queue[Event]"] = []
         self._event_cbs: Dict[Optional[str], List[Callable[[Any], Any]]] = {}
+        # events that arrived while nobody listened; handed to the first listener (bounded)
+        self._backlog: Deque[Event] = deque(maxlen=1024)
 
         self._link_lost_cbs: List[Callable[[], Any]] = [on_link_lost] if on_link_lost else []
         self._link_restored_cbs: List[Callable[[], Any]] = [on_link_restored] if on_link_restored else []
@@ -366,33 +369,64 @@ class Session:
     # --------------------------------------------------------------------------- callbacks API
 
     def add_link_lost(self, cb: Callable[[], Any]) -> None:
+        """Call ``cb()`` (on the dispatcher thread) when the link is lost."""
         self._link_lost_cbs.append(cb)
 
     def add_link_restored(self, cb: Callable[[], Any]) -> None:
+        """Call ``cb()`` when the link is back (same device session, or a rebooted device)."""
         self._link_restored_cbs.append(cb)
 
     def add_reconnect(self, cb: Callable[[Descriptor], Any]) -> None:
+        """Call ``cb(descriptor)`` after a rebooted device was handshaken and rediscovered."""
         self._reconnect_cbs.append(cb)
 
     def add_event_callback(self, name: Optional[str], cb: Callable[[Any], Any]) -> None:
-        """Call ``cb(value)`` (``cb(event)`` when ``name`` is None: every event) on the dispatcher."""
+        """Call ``cb(value)`` (``cb(event)`` when ``name`` is None: every event) on the dispatcher.
+
+        Events that arrived earlier while nobody listened (see :meth:`event_queue`) are handed to
+        the first listener that matches them.
+        """
         with self._lock:
             self._event_cbs.setdefault(name, []).append(cb)
+            if self._backlog:
+                keep: Deque[Event] = deque(maxlen=self._backlog.maxlen)
+                for ev in self._backlog:
+                    if name is None:
+                        self._dispatch(cb, ev)
+                    elif ev.name == name:
+                        self._dispatch(cb, ev.value)
+                    else:
+                        keep.append(ev)
+                self._backlog = keep
 
     def remove_event_callback(self, name: Optional[str], cb: Callable[[Any], Any]) -> None:
+        """Undo :meth:`add_event_callback`."""
         with self._lock:
             cbs = self._event_cbs.get(name, [])
             if cb in cbs:
                 cbs.remove(cb)
 
-    def event_queue(self) -> "queue.Queue[Event]":
-        """A new queue receiving every event from now on (see :meth:`drop_event_queue`)."""
+    def event_queue(self, names: Optional[Any] = None) -> "queue.Queue[Event]":
+        """A new queue receiving every event from now on (see :meth:`drop_event_queue`).
+
+        Events acknowledged while no callback and no queue listened are kept (up to 1024) and put
+        first into the next queue created (for the channel ``names`` it is meant for, if given), so
+        none is lost between connect() and the first listener.
+        """
         q: "queue.Queue[Event]" = queue.Queue()
         with self._lock:
             self._event_queues.append(q)
+            keep: Deque[Event] = deque(maxlen=self._backlog.maxlen)
+            for ev in self._backlog:
+                if names is None or ev.name in names:
+                    q.put(ev)
+                else:
+                    keep.append(ev)
+            self._backlog = keep
         return q
 
     def drop_event_queue(self, q: "queue.Queue[Event]") -> None:
+        """Stop feeding a queue made by :meth:`event_queue`."""
         with self._lock:
             if q in self._event_queues:
                 self._event_queues.remove(q)
@@ -449,7 +483,9 @@ class Session:
     def _send_hello(self, reply: bool) -> None:
         h = m.Hello(m.PROTOCOL_VERSION, m.FLAG_REPLY if reply else 0, self.nonce, HUB_MAX_PAYLOAD, self.heartbeat_ms)
         self._last_hello_tx = time.monotonic()
-        self._send_frame(m.HELLO, 0, 0, h.pack())
+        # a lone 00 first ends whatever noise the device may have collected (an empty frame is
+        # ignored by the receiver, PROTOCOL.md 1), so this hello is not lost with it
+        self._write(b"\x00" + encode_frame(m.HELLO, 0, 0, h.pack()))
 
     def _next_seq(self) -> int:
         with self._lock:
@@ -514,6 +550,9 @@ class Session:
             self._reopen_at = time.monotonic() + self._reopen_delay
             return
         self.stats["port_reopens"] += 1
+        # A re-opened port is a new connection: a new hub nonce (PROTOCOL.md 4.2). A board that lost
+        # power mixes it into its own nonce, which is how its new boot is told from the old one.
+        self.nonce = int.from_bytes(os.urandom(4), "little") or 1
         self._decoder.reset()
         self._port = port
         self._last_hello_tx = 0.0
@@ -646,11 +685,14 @@ class Session:
                 self._last_hb_tx = 0.0
                 self._cv.notify_all()
                 return
-            if prev.nonce != h.nonce:
-                # the device rebooted: new session on its side
+            if prev.nonce != h.nonce or (prev.descriptor_hash, prev.descriptor_length) != (
+                    h.descriptor_hash, h.descriptor_length):
+                # the device rebooted: new session on its side (a changed descriptor with an
+                # unchanged nonce means the same: new firmware on a board without nonce entropy)
                 self.stats["reboots"] += 1
                 log.info("hubwire: device on %s rebooted (nonce %08x -> %08x)", self.url, prev.nonce, h.nonce)
                 self._last_event_seq = None
+                self._descriptor_nonce = None  # rediscover (from the cache if the hash is known)
                 self._fail_pending(LinkLost("device rebooted"))
                 self._end_streams(LinkLost("device rebooted"))
                 if self.state is State.READY:
@@ -712,12 +754,16 @@ class Session:
                 log.warning("hubwire: malformed event %s: %s", ch.name, e)
                 return
             ev = Event(ch.name, value, f.seq, now, f.id)
-            for cb in self._event_cbs.get(ch.name, ()):
+            named = self._event_cbs.get(ch.name, ())
+            every = self._event_cbs.get(None, ())
+            for cb in named:
                 self._dispatch(cb, value)
-            for cb in self._event_cbs.get(None, ()):
+            for cb in every:
                 self._dispatch(cb, ev)
             for q in self._event_queues:
                 q.put(ev)
+            if not named and not every and not self._event_queues:
+                self._backlog.append(ev)
 
     def _on_sample(self, f: Frame, now: float) -> None:
         self.stats["samples"] += 1
@@ -767,7 +813,8 @@ class Session:
                     log.warning("hubwire: discovery on %s failed: %s", self.url, err)
                 self._cv.notify_all()
                 return
-            if current is None or current.nonce != hello.nonce:
+            key = (hello.nonce, hello.descriptor_hash, hello.descriptor_length)
+            if current is None or (current.nonce, current.descriptor_hash, current.descriptor_length) != key:
                 self._cv.notify_all()
                 return  # rebooted again meanwhile; the timer starts a new discovery
             first = self.descriptor is None
@@ -832,8 +879,10 @@ class Session:
                             raise LinkLost("link lost during descriptor download")
                         # fill the window
                         while len(inflight) < CHUNK_WINDOW and (gaps or next_off < total):
-                            off = gaps.popleft() if gaps else next_off
-                            if not gaps and off == next_off:
+                            if gaps:
+                                off = gaps.popleft()
+                            else:
+                                off = next_off
                                 next_off += want
                             if off in inflight or have[off]:
                                 continue
@@ -847,14 +896,16 @@ class Session:
                             if p.error is not None:
                                 raise p.error
                             if p.answer is not None:
+                                a = p.answer
+                                if a.type == m.NAK and a.payload[:1] == bytes((NakCode.NOT_LINKED,)):
+                                    # the device re-links on the hello this NAK triggered: ask again
+                                    # when the retry timer fires (counts as a try)
+                                    p.answer = None
+                                    continue
                                 del inflight[off]
                                 self._unregister(p)
-                                a = p.answer
                                 if a.type == m.NAK:
                                     code = a.payload[0] if a.payload else 0
-                                    if code == NakCode.NOT_LINKED:
-                                        gaps.append(off)
-                                        continue
                                     raise NakError(code, None, f"descriptor chunk at offset {off}")
                                 try:
                                     c = m.Chunk.unpack(a.payload)

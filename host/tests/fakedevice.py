@@ -52,6 +52,12 @@ class FakeDevice:
         h = m.Hello(self.version, flags, 0x1234567, self.max_payload, 250, self.hash, len(self.descriptor))
         self._send(m.HELLO, 0, 0, h.pack())
 
+    def reflash(self, descriptor: bytes) -> None:
+        """New firmware, same nonce (a board without nonce entropy): announce it."""
+        self.descriptor = descriptor
+        self.hash = m.fnv1a32(descriptor)
+        self._hello(False)
+
     def _run(self) -> None:
         dec = FrameDecoder(self.max_payload)
         linked = False

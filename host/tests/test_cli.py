@@ -88,3 +88,33 @@ def test_ports_json() -> None:
     r = subprocess.run([sys.executable, "-m", "hubwire", "ports", "--json"], capture_output=True, text=True)
     assert r.returncode == 0
     assert isinstance(json.loads(r.stdout), list)
+
+
+def test_watch_on_a_terminal_redraws_and_ctrl_c_ends_cleanly(emulator: Emulator, cache_dir: str) -> None:
+    import pty
+    import select
+    import signal
+
+    master, slave = pty.openpty()
+    env = dict(os.environ, HUBWIRE_CACHE_DIR=cache_dir)
+    p = subprocess.Popen([sys.executable, "-m", "hubwire", "watch", emulator.link, "--rate", "5"],
+                         stdout=slave, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, env=env)
+    os.close(slave)
+    out = b""
+    try:
+        deadline = time.monotonic() + 15
+        while out.count(b"\x1b[H\x1b[2J") < 2 and time.monotonic() < deadline:
+            r, _, _ = select.select([master], [], [], 0.5)
+            if r:
+                out += os.read(master, 65536)
+        assert out.count(b"\x1b[H\x1b[2J") >= 2, out[-500:]  # redrawn in place, no --duration needed
+        text = out.decode(errors="replace")
+        assert "battery" in text and "link ready" in text and "Ctrl-C" in text
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=10)
+    finally:
+        if p.poll() is None:
+            p.kill()
+        os.close(master)
+    assert p.returncode == 0
+    assert b"Traceback" not in err

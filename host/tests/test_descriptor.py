@@ -63,7 +63,7 @@ BAD = [
     (b'{"p":2,"n":"d","ch":[]}', "protocol version"),
     (b'{"p":1,"n":"d","ch":[],"zz":1}', "unknown top-level key"),
     (b'{"p":1,"n":"d","n":"e","ch":[]}', "duplicate key"),
-    (b'{"p":1,"n":"","ch":[]}', "device name"),
+    (b'{"p":1,"n":5,"ch":[]}', "device name"),
     (b'{"p":1,"n":"d","ch":{}}', "must be a list"),
     (b'{"p":1,"n":"d","ch":[{"id":1,"n":"x","a":"r","t":"f32","min":NaN}]}', "not valid JSON"),
     (json.dumps({"p": 1, "n": "d", "ch": [{"id": 1, "n": "a", "a": "r", "t": "u8"},
@@ -119,6 +119,17 @@ def test_bad_descriptors(data: bytes, message: str) -> None:
     with pytest.raises(DescriptorError) as e:
         parse_descriptor(data)
     assert message in str(e.value)
+
+
+def test_failsafe_number_for_arrays_structs_and_bools() -> None:
+    d = parse_descriptor(doc(t="f32", c=2, fs=0))
+    assert d.by_name("x").failsafe == (0.0, 0.0)  # type: ignore[union-attr]
+    d = parse_descriptor(doc(t="bool", fs=1))
+    assert d.by_name("x").failsafe is True  # type: ignore[union-attr]
+    d = parse_descriptor(doc(t="struct", f=[{"n": "a", "t": "u8"}, {"n": "b", "t": "i16", "c": 2}], fs=0))
+    assert tuple(d.by_name("x").failsafe) == (0, (0, 0))  # type: ignore[union-attr, arg-type]
+    d = parse_descriptor(doc(t="u8", c=2, fs=[1, 2]))
+    assert d.by_name("x").failsafe == (1, 2)  # type: ignore[union-attr]
 
 
 def test_keyword_and_underscore_field_names_work() -> None:

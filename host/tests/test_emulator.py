@@ -9,7 +9,6 @@ from typing import Any, List
 import pytest
 
 import hubwire
-from hubwire import session as sessmod
 from hubwire.errors import InvalidValue, LinkLost, NakError
 from hubwire.wire import messages as m
 from hubwire.wire.frame import Frame, FrameDecoder
@@ -128,8 +127,7 @@ def test_hub_checks_types_and_ranges_before_sending(rover: Any) -> None:
 
 def test_lost_ack_is_retried_with_same_seq_and_applied_once(rover: Any) -> None:
     s = rover.session
-    seen: List[Frame] = []
-    dropped = []
+    dropped: List[Frame] = []
     tx: List[bytes] = []
 
     def drop_first_ack(f: Frame) -> bool:
@@ -153,7 +151,6 @@ def test_lost_ack_is_retried_with_same_seq_and_applied_once(rover: Any) -> None:
     assert len(controls) == 2 and controls[0] == controls[1]  # a retry repeats the same seq
     assert rover.applied == before + 1
     assert rover.left == 0.75
-    del seen
 
 
 # ------------------------------------------------------------------------------------- NAK paths
@@ -274,6 +271,24 @@ def test_events_exactly_once_in_order_with_lost_acks(rover: Any) -> None:
     assert len(acks) >= 8
 
 
+def test_events_before_any_listener_are_kept_for_the_first_one(rover: Any) -> None:
+    assert rover.selftest(3) == 3
+    wait_until(lambda: rover.session.stats["events"] == 3, 5, "three events acknowledged")
+    got: List[Any] = []
+    done = threading.Event()
+
+    def cb(v: Any) -> None:
+        got.append(v)
+        if len(got) == 3:
+            done.set()
+
+    rover.on("bumper", cb)
+    assert done.wait(5)
+    assert got == [True, False, True]
+    with rover.events() as evs:  # already handed out: not delivered twice
+        assert evs.get(0.2) is None
+
+
 def test_event_callbacks_run_on_dispatcher_and_may_call(rover: Any, emulator: Emulator) -> None:
     done = threading.Event()
     seen: List[Any] = []
@@ -360,9 +375,14 @@ def test_link_loss_on_the_hub_side_fails_fast_and_recovers(rover: Any, emulator:
     rover.on("link_lost", lost.set)
     rover.on("link_restored", restored.set)
     rover.left = 0.5
+    st = rover.stream("battery", hz=20, timeout=5)
+    assert isinstance(next(st), int)
     emulator.pause()  # the device falls silent
     try:
         assert lost.wait(3)
+        with pytest.raises(LinkLost):  # subscriptions end with the link
+            while True:
+                next(st)
         assert rover.state == "lost"
         t = time.monotonic()
         with pytest.raises(LinkLost):
@@ -390,7 +410,7 @@ def test_link_loss_on_the_device_side_fires_failsafe(rover: Any) -> None:
         assert lost.wait(5)  # seen through the device's announce hello
     finally:
         rover.session.tx_paused = False
-    assert restored.wait(5)
+    assert restored.wait(5), (rover.session.stats, rover.health())
     wait_until(lambda: rover.state == "ready", 5, "ready")
     assert rover.failsafes == 1
     assert rover.left == 0.0 and rover.right == 0.0
@@ -445,11 +465,9 @@ def test_connect_to_a_missing_port_fails_clearly(tmp_path: Any) -> None:
 
 
 def test_health_reports_heartbeats(rover: Any) -> None:
-    hb = threading.Event()
     wait_until(lambda: rover.health().device_heartbeats >= 2, 3, "two device heartbeats")
     h = rover.health()
     assert h.state == "ready" and h.heartbeat_age is not None and h.heartbeat_age < 0.5
     assert h.device_heartbeat_ms == 250
     assert h.hub_counters == {"crc": 0, "overflow": 0, "dropped": 0}
     assert h.device_counters == {"crc": 0, "overflow": 0, "dropped": 0}
-    del hb

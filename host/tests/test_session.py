@@ -10,6 +10,8 @@ import serial.tools.list_ports
 import hubwire
 from hubwire import device as devmod
 from hubwire.errors import DescriptorError, NoDeviceFound, ProtocolVersionError, Timeout
+from hubwire.wire import messages as m
+from hubwire.wire.frame import FrameDecoder
 
 from fakedevice import DESCRIPTOR, FakeDevice
 
@@ -80,8 +82,11 @@ def test_connect_timeout_when_nothing_answers(tmp_path: Any) -> None:
         with pytest.raises(Timeout) as e:
             hubwire.connect(os.ttyname(slave), timeout=0.5)
         assert os.ttyname(slave) in str(e.value) and "0.5 s" in str(e.value)
-        hellos = os.read(master, 4096)
-        assert hellos.count(b"\x00") >= 3  # one hello every 100 ms
+        sent = FrameDecoder().feed(os.read(master, 4096))
+        hellos = [f for f in sent if f.type == m.HELLO]
+        assert len(hellos) == len(sent) and 3 <= len(hellos) <= 8  # one hello every 100 ms
+        h = m.Hello.unpack(hellos[0].payload)
+        assert (h.version, h.flags, h.max_payload, h.heartbeat_ms) == (1, 0, 255, 250) and h.nonce != 0
     finally:
         os.close(master)
         os.close(slave)
@@ -105,3 +110,19 @@ def test_find_port(monkeypatch: Any) -> None:
     with pytest.raises(NoDeviceFound) as e:
         hubwire.connect()
     assert "2 boards" in str(e.value) and "/dev/ttyUSB0" in str(e.value) and "/dev/ttyACM1" in str(e.value)
+
+
+def test_same_nonce_but_new_descriptor_is_a_reboot(cache_dir: str) -> None:
+    import threading
+
+    new = DESCRIPTOR.replace(b'"n":"x"', b'"n":"y"')
+    with FakeDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
+        done = threading.Event()
+        dev.on("reconnect", lambda d: done.set())
+        assert "x" in dev and "y" not in dev
+        fake.reflash(new)
+        assert done.wait(5)
+        assert "y" in dev and "x" not in dev
+        assert dev.session.stats["reboots"] == 1 and dev.session.stats["downloads"] == 2
+        dev.y = 7
+        assert dev.y == 7

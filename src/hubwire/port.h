@@ -22,6 +22,8 @@ class Clock {
  public:
   // Milliseconds since some fixed point; wraps at 2^32.
   virtual uint32_t millis() = 0;
+  // Microseconds, for entropy only (when the hub is first heard varies from boot to boot).
+  virtual uint32_t micros() { return millis() * 1000u; }
 };
 
 }  // namespace hubwire

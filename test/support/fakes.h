@@ -34,7 +34,9 @@ class FakeStream : public ByteStream {
 class FakeClock : public Clock {
  public:
   uint32_t millis() override { return now; }
+  uint32_t micros() override { return us ? us : now * 1000u; }
   uint32_t now = 1000;
+  uint32_t us = 0;  // set to pin micros() independently of millis()
 };
 
 struct RxFrame {

@@ -2,6 +2,8 @@
 // retries, duplicate suppression, link loss and failsafe, stream timing.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "fakes.h"
@@ -153,14 +155,16 @@ class Session : public ::testing::Test {
   }
 };
 
-TEST_F(Session, AnnouncesItselfAtBootWithHashAndLength) {
-  auto f = drain(stream);
+TEST_F(Session, AnnouncesItselfASecondAfterBootWithHashAndLength) {
+  EXPECT_TRUE(drain(stream).empty());  // no nonce yet: it is drawn when the hub is first heard
+  auto f = pump(HUBWIRE_ANNOUNCE_MS);
   ASSERT_EQ(f.size(), 1u);
   EXPECT_EQ(f[0].type, '*');
   ASSERT_EQ(f[0].payload.size(), 16u);
   EXPECT_EQ(f[0].payload[0], 1);
   EXPECT_EQ(f[0].payload[1] & (kHelloDevice | kHelloReply), kHelloDevice);
-  EXPECT_EQ(loadU32(&f[0].payload[2]), 0xABCDEF01u);
+  EXPECT_EQ(loadU32(&f[0].payload[2]), device.nonce());
+  EXPECT_NE(device.nonce(), 0u);
   EXPECT_EQ(loadU16(&f[0].payload[6]), HUBWIRE_MAX_PAYLOAD);
   EXPECT_EQ(loadU16(&f[0].payload[8]), HUBWIRE_HEARTBEAT_MS);
   EXPECT_EQ(loadU32(&f[0].payload[10]), device.descriptorHash());
@@ -169,11 +173,55 @@ TEST_F(Session, AnnouncesItselfAtBootWithHashAndLength) {
 }
 
 TEST_F(Session, RepeatsAnnouncementWhileUnlinked) {
-  drain(stream);
+  pump(HUBWIRE_ANNOUNCE_MS);
   EXPECT_TRUE(pump(HUBWIRE_ANNOUNCE_MS - 1).empty());
   auto f = pump(1);
   ASSERT_EQ(f.size(), 1u);
   EXPECT_EQ(f[0].type, '*');
+}
+
+// A board that loses power boots with the same RAM, counter and code path every time; only the
+// moment it first hears the hub differs. The nonce must differ with it, or the hub would take the
+// new boot for the old session (and drop its first event as a duplicate).
+TEST(Nonce, DependsOnWhenTheHubIsFirstHeard) {
+  uint32_t seen[2];
+  for (int boot = 0; boot < 2; ++boot) {
+    FakeStream s;
+    FakeClock c;
+    Device d(s, c);
+    dut = &d;
+    ASSERT_TRUE(d.begin("tester", declarations, "2.1", 0x1234));  // same seed each boot
+    c.now += 40;
+    c.us = 40000 + (uint32_t)boot * 1372;  // the hub's hello lands at another instant
+    sendFrame(s, '*', 0, 0, hubHello(9));
+    d.update();
+    auto f = drain(s);
+    ASSERT_FALSE(f.empty());
+    seen[boot] = loadU32(&f[0].payload[2]);
+    EXPECT_EQ(seen[boot], d.nonce());
+  }
+  EXPECT_NE(seen[0], seen[1]);
+}
+
+// In a simulator even the timing repeats (bytes that arrived during boot are read at a fixed
+// instant); the hub's own random nonce, from the first hello heard, still differs per connection.
+TEST(Nonce, DependsOnTheHubsNonceInTheFirstHelloHeard) {
+  uint32_t seen[2];
+  for (int boot = 0; boot < 2; ++boot) {
+    FakeStream s;
+    FakeClock c;
+    Device d(s, c);
+    dut = &d;
+    ASSERT_TRUE(d.begin("tester", declarations, "2.1", 0x1234));
+    c.us = 40000;  // identical timing
+    sendFrame(s, '*', 0, 0, hubHello(100 + (uint32_t)boot));
+    d.update();
+    seen[boot] = d.nonce();
+    sendFrame(s, '*', 0, 0, hubHello(555));  // a later hub session does not change it
+    d.update();
+    EXPECT_EQ(d.nonce(), seen[boot]);
+  }
+  EXPECT_NE(seen[0], seen[1]);
 }
 
 TEST_F(Session, HandshakeAnswersHelloAndLinks) {
@@ -309,6 +357,7 @@ TEST_F(Session, WriteErrorsLeaveTheValueAlone) {
   link();
   speed = 0.1f;
   expectNak(transact('C', kSpeed, le<float>(1.5f)), kErrOutOfRange);
+  expectNak(transact('C', kSpeed, le<float>(NAN)), kErrOutOfRange);  // NaN is in no range
   expectNak(transact('C', kSpeed, Bytes(3)), kErrBadLength);
   expectNak(transact('C', kCounts, Bytes(6)), kErrNotWritable);
   expectNak(transact('C', 77, Bytes(1)), kErrUnknownChannel);

@@ -197,8 +197,8 @@ class ReferenceReceiver:
 
     State: collecting decoded bytes with the COBS block counter; the zero that ends a block is
     appended only when another code byte follows. Decoded length > 5 + max_payload -> overflow, skip
-    to the next 00. At 00: block not finished -> dropped (bad COBS); length < 5 -> dropped; bad CRC
-    -> crc; else a frame.
+    to the next 00. At 00: nothing collected -> ignored (empty frame); block not finished -> dropped
+    (bad COBS); length < 5 -> dropped; bad CRC -> crc; else a frame.
     """
 
     def __init__(self, max_payload: int) -> None:
@@ -223,6 +223,8 @@ class ReferenceReceiver:
         if b == 0:
             if self.skipping:
                 self.counters["overflow"] += 1
+            elif self.code == 0:
+                pass  # empty frame: ignored, not counted
             elif self.remaining:
                 self.counters["dropped"] += 1
             elif len(self.buf) < 5:
@@ -304,9 +306,12 @@ def gen_streams() -> Dict[str, Any]:
     add("truncated frame (3 bytes decoded, too short)", 32, cobs.encode(b"\x52\x01\x05") + b"\x00" + a, [fa], c(dropped=1))
     add("lost delimiter merges two frames -> crc", 32, b[:-1] + e + a, [fa], c(crc=1))
     add("missing delimiter at end (frame pending, nothing counted)", 32, a + e[:-1], [fa], Z)
-    add("two 00 in a row", 32, a + b"\x00" + e, [fa, fe], c(dropped=1))
-    add("stream starting with 00", 32, b"\x00" + a, [fa], c(dropped=1))
-    add("three 00 in a row", 32, a + b"\x00\x00" + e, [fa, fe], c(dropped=2))
+    add("two 00 in a row: the empty frame is ignored, not counted", 32, a + b"\x00" + e, [fa, fe], Z)
+    add("stream starting with 00 (a sender's flush) is not counted", 32, b"\x00" + a, [fa], Z)
+    add("three 00 in a row", 32, a + b"\x00\x00" + e, [fa, fe], Z)
+    add("lone 00 after garbage ends the garbage", 32, b"\x13\x37\x00\x00" + a, [fa], c(dropped=1))
+    add("empty frames between frames and after an overflow", 32,
+        b"\x41" * 100 + b"\x00\x00" + a + b"\x00" + e, [fa, fe], c(overflow=1))
     add("payload full of zeros", 32, z + a, [fz, fa], Z)
     add("bad COBS: code byte points past the delimiter", 32, b"\x09\x52\x01\x05\x00" + a, [fa], c(dropped=1))
     add("bad COBS: 0xff block cut short", 32, b"\xff" + b"\x01" * 20 + b"\x00" + a, [fa], c(dropped=1))
@@ -358,7 +363,8 @@ def gen_streams() -> Dict[str, Any]:
                            "bytes present); raw length > 5 + max_payload -> overflow (takes precedence); "
                            "else COBS block unfinished at the 00 -> dropped; raw length < 5 -> dropped; "
                            "CRC mismatch -> crc. Garbage ending in 00 is one dropped frame; an empty frame "
-                           "(00 00) is one dropped frame; bytes after the last 00 are pending, not counted.",
+                           "(00 00) is ignored and not counted; bytes after the last 00 are pending, not "
+                           "counted.",
             "vectors": vectors}
 
 

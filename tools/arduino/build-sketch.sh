@@ -51,7 +51,8 @@ ln -s "$LIB_ROOT/library.properties" "$LIBS/$LIB_NAME/library.properties"
 ln -s "$LIB_ROOT/src" "$LIBS/$LIB_NAME/src"
 
 mkdir -p "$BUILD_DIR"
-LOG="$BUILD_DIR/build.log"
+# Outside the build path: arduino-builder wipes that folder when the build options change.
+LOG="$BUILD_DIR.log"
 
 # -hardware /usr/share/arduino-builder provides the ctags recipe
 # (without it: "ctags pattern is missing").

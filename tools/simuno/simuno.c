@@ -9,7 +9,8 @@
  * Everything libsimavr prints goes to stderr.
  *
  * Signals: SIGUSR1 resets the MCU (like the DTR auto-reset when a host opens
- * an Uno's port); SIGTERM / SIGINT / SIGHUP stop cleanly (symlink removed,
+ * an Uno's port); SIGUSR2 presses or releases a button on PD2 (Arduino pin 2),
+ * which otherwise reads high, as INPUT_PULLUP makes it on a real board; SIGTERM / SIGINT / SIGHUP stop cleanly (symlink removed,
  * exit status 0). With --reset-on-open, any open() of the pty resets the MCU
  * too (inotify IN_OPEN on the slave device), as a real Uno does.
  *
@@ -35,6 +36,7 @@
 #include <simavr/sim_io.h>
 #include <simavr/sim_irq.h>
 #include <simavr/sim_time.h>
+#include <simavr/avr_ioport.h>
 #include <simavr/avr_uart.h>
 #include <simavr/parts/uart_pty.h>
 
@@ -52,6 +54,8 @@ static volatile sig_atomic_t g_reset = 0;
 
 static void on_stop(int sig) { (void)sig; g_stop = 1; }
 static void on_reset(int sig) { (void)sig; g_reset = 1; }
+static volatile sig_atomic_t g_button_toggles = 0;
+static void on_button(int sig) { (void)sig; g_button_toggles = g_button_toggles + 1; }
 
 /* ---- cycle log (GPIOR0 writes) ---------------------------------------- */
 static FILE *cycles_log = NULL;
@@ -174,6 +178,8 @@ int main(int argc, char **argv)
 	sigaction(SIGHUP, &sa, NULL);
 	sa.sa_handler = on_reset;
 	sigaction(SIGUSR1, &sa, NULL);
+	sa.sa_handler = on_button;
+	sigaction(SIGUSR2, &sa, NULL);
 	signal(SIGPIPE, SIG_IGN);
 
 	if (access(elf, R_OK) != 0) {
@@ -276,6 +282,10 @@ int main(int argc, char **argv)
 	fprintf(stderr, "simuno: %s on %s (%s @ %lu Hz%s), link %s\n", elf, slave_name,
 		fw.mmcu, freq, fast ? ", unthrottled" : "", link_path);
 
+	/* simavr models no pull-ups: drive PD2 as a pulled-up pin with a button to ground would. */
+	avr_irq_t *button = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2);
+	int button_level = -1;
+
 	int64_t base_wall = now_ns();
 	avr_cycle_count_t base_cycle = avr->cycle;
 	int64_t hold_until = 0; /* wall time until which the MCU is held in reset */
@@ -293,12 +303,22 @@ int main(int argc, char **argv)
 		if (g_reset) {
 			g_reset = 0;
 			avr_reset(avr);
+			button_level = -1; /* the reset cleared the pin registers: drive the button again */
 			discard_input(&pty);
 			/* XOFF is a filtered irq (notifies on change only) and the UART
 			 * fifo was just emptied behind its back: resync it. */
 			avr_raise_irq(uart_xoff, 0);
 			fprintf(stderr, "simuno: reset\n");
 			hold_until = boot_delay_ms ? now_ns() + boot_delay_ms * 1000000LL : 0;
+		}
+		int want_level = (g_button_toggles % 2) ? 0 : 1;
+		if (button && want_level != button_level) {
+			/* the level an input pin reads when nothing drives it, then the pin itself */
+			avr_ioport_external_t ext = { .name = 'D', .mask = 1 << 2, .value = (unsigned)want_level << 2 };
+			avr_ioctl(avr, AVR_IOCTL_IOPORT_SET_EXTERNAL('D'), &ext);
+			button->value = !want_level; /* the irq filters repeats: make this one count */
+			avr_raise_irq(button, want_level);
+			button_level = want_level;
 		}
 		if (hold_until) {
 			if (now_ns() < hold_until) {

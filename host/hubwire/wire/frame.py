@@ -95,7 +95,8 @@ class FrameDecoder:
 
     Feed it whatever bytes arrive (:meth:`feed`); it returns the valid frames completed by them and
     counts every dropped frame in :attr:`crc`, :attr:`overflow` or :attr:`dropped` exactly as
-    PROTOCOL.md §1 says. It resynchronises at every ``0x00``.
+    PROTOCOL.md §1 says (an empty frame, ``00 00``, is ignored and not counted). It resynchronises
+    at every ``0x00``.
 
     ``max_payload`` is the largest payload this receiver accepts (1..255); a frame whose raw length
     exceeds ``5 + max_payload`` is counted as ``overflow``.
@@ -148,23 +149,30 @@ class FrameDecoder:
                 self.overflow += 1
                 del parts[0]
             fast = self._fast_limit
+            limit = self._raw_limit
             append = out.append
+            decode = _cobs_decode
+            crc = crc_hqx
+            new = _tuple_new
+            frame_cls = Frame
             for enc in parts:
-                if len(enc) > fast and decoded_length(enc) > self._raw_limit:
+                if not enc:
+                    continue  # an empty frame (00 00) is ignored, not counted: a sender's flush
+                if len(enc) > fast and decoded_length(enc) > limit:
                     self.overflow += 1
                     continue
                 try:
-                    raw = _cobs_decode(enc)
+                    raw = decode(enc)
                 except _CobsError:
                     self.dropped += 1
                     continue
                 if len(raw) < 5:
                     self.dropped += 1
                     continue
-                if crc_hqx(raw[:-2], 0xFFFF) != raw[-2] | (raw[-1] << 8):
+                if crc(raw[:-2], 0xFFFF) != raw[-2] | (raw[-1] << 8):
                     self.crc += 1
                     continue
-                append(_tuple_new(Frame, (raw[0], raw[1], raw[2], raw[3:-2])))
+                append(new(frame_cls, (raw[0], raw[1], raw[2], raw[3:-2])))
             self.frames += len(out)
         if len(tail) > self._spill and not self._skipping:
             # no delimiter for a long time: the frame is an overflow whatever follows; stop buffering

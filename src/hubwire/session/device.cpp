@@ -306,7 +306,7 @@ uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
 
 // ---------------------------------------------------------------- running
 
-bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t nonce) {
+bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t seed) {
   declarations_ = declarations;
   name_ = name;
   firmware_ = firmware;
@@ -333,13 +333,25 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t no
     return false;
   }
   descLength_ = describe(0, 0, nullptr);
-  nonce_ = nonce ? nonce : 0x48570001UL;  // never 0 (the protocol reserves it)
+  seed_ = seed;
+  nonce_ = 0;
   started_ = true;
   linked_ = false;
-  uint32_t now = clock_.millis();
-  lastAnnounce_ = now;
-  sendHello(false);  // may be lost (the hub may not be listening yet); we repeat while unlinked
+  lastAnnounce_ = clock_.millis();  // the first announcement follows one interval after boot
   return true;
+}
+
+// Drawn once per boot, at the first hub hello (or the first announcement if none came first):
+// the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
+// connection even where a simulated or freshly powered board repeats everything else.
+void Device::drawNonce(uint32_t hubNonce) {
+  uint32_t h = kFnvOffset, us = clock_.micros();
+  for (uint8_t i = 0; i < 32; i += 8) {
+    h = fnv1a(h, (uint8_t)(seed_ >> i));
+    h = fnv1a(h, (uint8_t)(us >> i));
+    h = fnv1a(h, (uint8_t)(hubNonce >> i));
+  }
+  nonce_ = h ? h : 1;  // never 0: the protocol reserves it
 }
 
 void Device::update() {
@@ -427,6 +439,7 @@ void Device::onHello(const Frame& f) {
     return;
   }
   const uint8_t* p = f.payload;
+  if (!nonce_) drawNonce(loadU32(p + 2));
   if (!(p[1] & kHelloReply)) sendHello(true);
   if (p[0] != kProtocolVersion || (p[1] & kHelloDevice)) return;  // the hub reports the mismatch
   uint32_t nonce = loadU32(p + 2);
@@ -506,7 +519,7 @@ void Device::onControl(const Frame& f) {
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
       for (uint8_t i = 0; i < n && code == kOk; ++i) {
         double v = scalarAsDouble(t.code, f.payload + i * size);
-        if (v < info_.min || v > info_.max) code = kErrOutOfRange;
+        if (!(v >= info_.min && v <= info_.max)) code = kErrOutOfRange;  // NaN fails too
       }
     }
     if (code == kOk) {
@@ -613,6 +626,7 @@ void Device::sendEvent() {
 }
 
 void Device::sendHello(bool isReply) {
+  if (!nonce_) drawNonce(0);
   uint8_t* p = tx_.payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));

@@ -151,9 +151,11 @@ class Device {
 
   // ---- running ----
 
-  // Checks the declarations, computes the descriptor hash and announces the device.
-  // false when a declaration is wrong: error() and errorChannel() say which and why.
-  bool begin(Text name, void (*declarations)(), Text firmware = Text(), uint32_t nonce = 0);
+  // Checks the declarations and computes the descriptor hash. false when a declaration is wrong:
+  // error() and errorChannel() say which and why. seed should differ between boots where the
+  // board can tell (a boot counter, a hardware RNG); the session nonce also mixes in the moment
+  // the hub is first heard, which differs even when the seed cannot.
+  bool begin(Text name, void (*declarations)(), Text firmware = Text(), uint32_t seed = 0);
   // Reads what arrived, answers it, sends heartbeats, retries events, streams samples. Never blocks.
   void update();
 
@@ -168,6 +170,8 @@ class Device {
   void onLinkLost(void (*fn)()) { onLinkLost_ = fn; }
 
   bool linked() const { return linked_; }
+  // This boot's session nonce; 0 until the hub is first heard or the first announcement.
+  uint32_t nonce() const { return nonce_; }
   SetupError error() const { return error_; }
   uint8_t errorChannel() const { return errorChannel_; }
   uint8_t channelCount() const { return channelCount_; }
@@ -199,6 +203,7 @@ class Device {
   void newHubSession(uint32_t nonce);
   void loseLink();
   void sendHello(bool reply);
+  void drawNonce(uint32_t hubNonce);
   void sendHeartbeat();
   void sendEvent();
   void sendSamples();
@@ -263,7 +268,7 @@ class Device {
   uint32_t descHash_;
 
   // Session.
-  uint32_t nonce_, hubNonce_;
+  uint32_t seed_ = 0, nonce_, hubNonce_;
   bool started_, linked_, hubKnown_;
   uint8_t peerMax_;
   uint16_t peerBeatMs_;

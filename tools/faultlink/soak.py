@@ -1,0 +1,274 @@
+"""Soak: the Rover emulator behind a faulty link, hammered with writes, reads and events.
+
+    PYTHONPATH=tools .venv/bin/python -m faultlink.soak --seconds 75          # the bounded CI run
+    PYTHONPATH=tools .venv/bin/python -m faultlink.soak --frames 1000000      # the long run
+
+(``HUBWIRE_SOAK_FRAMES`` / ``HUBWIRE_SOAK_SECONDS`` set the same from the environment, which is how
+``host/tests/reliability/test_soak.py`` is switched to the long mode.)
+
+The hub connects over a clean link (handshake and descriptor download are tested under faults
+elsewhere), then every fault is switched on in both directions for the whole run:
+
+- writes to ``left``, each with a value never written before (k/2^20, exact in f32);
+- a read of ``left`` every 10 writes: the value must be one that was written (or 0, the initial and
+  failsafe value) -- a corrupted frame accepted by either side would show up here;
+- ``selftest(4)`` every 40 writes: the device queues up to 4 bumper events (True, False, ...) and
+  returns how many it queued; the hub must deliver exactly those, in order, no duplicate.
+
+At the end the faults are switched off and the device's ``applied`` counter is compared with the
+number of writes the hub reported as acknowledged: equal, or more by at most the number of writes
+that raised Timeout (those may or may not have been applied; counted separately).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+from . import FaultLink, Faults
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+
+#: the issue's link: BER 1e-4, 1% byte drops, 0.5% duplicated frames, a garbage burst (8..64 random bytes) every 1 s
+SOAK_FAULTS = Faults(ber=1e-4, drop=0.01, dup=0.005, garbage_every=1.0, garbage_len=(8, 64))
+
+
+def emulator_binary() -> str:
+    return os.environ.get("HUBWIRE_EMULATOR") or os.path.join(REPO, "build", "emulator", "hubwire-emulator")
+
+
+def value_for(k: int) -> float:
+    """k-th written value: distinct for k < 2^21, within -1..1, exactly representable in f32."""
+    return (((k * 7919) % (1 << 21)) - (1 << 20)) / float(1 << 20)
+
+
+def start_emulator(binary: str, link: str) -> subprocess.Popen:
+    proc = subprocess.Popen([binary, "--link", link], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            stdin=subprocess.DEVNULL)
+    assert proc.stdout is not None
+    line = proc.stdout.readline().decode().strip()
+    if line != f"READY {link}":
+        proc.kill()
+        raise RuntimeError(f"emulator said {line!r}")
+    return proc
+
+
+def _retry(fn: Callable[[], Any], what: str, deadline: float = 30.0) -> Any:
+    """Call fn until it does not raise Timeout/LinkLost (reads are idempotent)."""
+    import hubwire
+
+    end = time.monotonic() + deadline
+    while True:
+        try:
+            return fn()
+        except (hubwire.Timeout, hubwire.LinkLost):
+            if time.monotonic() > end:
+                raise RuntimeError(f"{what}: no answer for {deadline} s")
+            time.sleep(0.05)
+
+
+def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, seed: int = 1,
+             faults: Faults = SOAK_FAULTS, workdir: str = "/tmp", binary: Optional[str] = None,
+             log: Callable[[str], None] = print) -> Dict[str, Any]:
+    """Run the soak until ``seconds`` pass or ``frames`` went through the proxy; return the counts."""
+    import hubwire
+
+    if seconds is None and frames is None:
+        seconds = 75.0
+    binary = binary or emulator_binary()
+    dev_link = os.path.join(workdir, f"soak-rover-{os.getpid()}")
+    hub_link = os.path.join(workdir, f"soak-hub-{os.getpid()}")
+    emu = start_emulator(binary, dev_link)
+    fl = FaultLink(dev_link, hub_link, seed=seed)
+    fl.start()
+    dev = None
+    try:
+        dev = hubwire.connect(hub_link, cache_dir=False, timeout=10)
+        s = dev.session
+        applied0 = dev.applied
+        failsafes0 = dev.failsafes
+        events: List[Tuple[int, bool]] = []
+        ev_lock = threading.Lock()
+        ev_cv = threading.Condition(ev_lock)
+
+        def on_event(ev: Any) -> None:
+            with ev_cv:
+                events.append((ev.seq, ev.value))
+                ev_cv.notify_all()
+
+        dev.on("*", on_event)
+        lost: List[float] = []
+        dev.on("link_lost", lambda: lost.append(time.monotonic()))
+
+        written = {0.0}
+        acked = timeouts = link_lost_errors = naks = 0
+        reads = bad_reads = read_timeouts = 0
+        bad_values: List[float] = []
+        st_calls = st_returned = st_timeouts = st_timeout_max = 0
+        st_batches: List[int] = []
+        last_acked: Optional[float] = None
+        last_timed_out: List[float] = []
+
+        fl.set_faults(**{k: getattr(faults, k) for k in ("ber", "drop", "dup", "truncate", "garbage_every",
+                                                        "garbage_len", "delay", "stall_every", "stall_ms")})
+        t0 = time.monotonic()
+        f0 = fl.stats()["frames"]
+        k = 0
+        next_report = t0 + 10
+        while True:
+            now = time.monotonic()
+            if seconds is not None and now - t0 >= seconds:
+                break
+            if frames is not None and fl.stats()["frames"] - f0 >= frames:
+                break
+            if now >= next_report:
+                st = fl.stats()
+                log(f"soak: {now - t0:.0f} s, {st['frames'] - f0} frames, {st['faults']} faults, "
+                    f"{acked} acked, {timeouts} timeouts, {len(events)} events")
+                next_report = now + 10
+            k += 1
+            v = value_for(k)
+            written.add(v)
+            try:
+                dev.left = v
+                acked += 1
+                last_acked = v
+                last_timed_out = []
+            except hubwire.Timeout:
+                timeouts += 1
+                last_timed_out.append(v)
+            except hubwire.LinkLost:
+                link_lost_errors += 1
+                time.sleep(0.05)
+                continue
+            except hubwire.NakError as e:  # a corrupted frame that passed the CRC would show here
+                naks += 1
+                log(f"soak: NAK on write {k}: {e}")
+            if k % 10 == 0:
+                try:
+                    got = dev.left
+                    reads += 1
+                    if got not in written:
+                        bad_reads += 1
+                        bad_values.append(got)
+                except (hubwire.Timeout, hubwire.LinkLost):
+                    read_timeouts += 1
+            if k % 40 == 0:
+                st_calls += 1
+                try:
+                    q = dev.selftest(4)
+                    st_returned += q
+                    st_batches.append(q)
+                except hubwire.Timeout:
+                    st_timeouts += 1
+                    st_timeout_max += 4
+                    st_batches.append(-1)
+                except hubwire.LinkLost:
+                    link_lost_errors += 1
+        elapsed = time.monotonic() - t0
+        during = fl.stats()
+        # accounting on a clean link
+        fl.set_faults(ber=0.0, drop=0.0, dup=0.0, truncate=0.0, garbage_every=0.0, delay=0.0, stall_every=0.0)
+        lo, hi = st_returned, st_returned + st_timeout_max
+        with ev_cv:
+            ev_cv.wait_for(lambda: len(events) >= lo, 15)
+        time.sleep(0.5)  # retried events still in flight (there should be none beyond hi)
+        applied = _retry(lambda: dev.applied, "read applied") - applied0
+        failsafes = _retry(lambda: dev.failsafes, "read failsafes") - failsafes0
+        final_left = _retry(lambda: dev.left, "read left")
+        with ev_lock:
+            evs = list(events)
+        seq_steps = [(b[0] - a[0]) & 0xFF for a, b in zip(evs, evs[1:])]
+        expected_values = [i % 2 == 0 for q in st_batches if q >= 0 for i in range(q)]
+        health = s.health()
+        result: Dict[str, Any] = {
+            "mode": "frames" if frames is not None else "seconds",
+            "seconds": round(elapsed, 1),
+            "seed": seed,
+            "faults": fl.config()["h2d"],
+            "proxy": {"frames": during["frames"] - f0, "faults": during["faults"],
+                      "h2d": during["h2d"], "d2h": during["d2h"]},
+            "writes": k, "acked": acked, "timeouts": timeouts, "naks": naks,
+            "link_lost_errors": link_lost_errors,
+            "applied": applied, "applied_minus_acked": applied - acked,
+            "reads": reads, "bad_reads": bad_reads, "bad_values": bad_values[:10], "read_timeouts": read_timeouts,
+            "selftest_calls": st_calls, "events_queued": st_returned, "selftest_timeouts": st_timeouts,
+            "events_delivered": len(evs),
+            "event_seq_gaps_or_dups": sum(1 for d in seq_steps if d != 1),
+            "event_order_ok": st_timeouts > 0 or [v for _, v in evs] == expected_values,
+            "failsafes": failsafes, "link_lost_callbacks": len(lost),
+            "reboots": s.stats["reboots"], "state": dev.state,
+            "final_left": final_left, "last_acked": last_acked, "last_timed_out": last_timed_out,
+            "hub_stats": {k2: s.stats[k2] for k2 in ("retries", "events", "duplicate_events", "unmatched_answers",
+                                                     "link_lost", "rehandshakes", "not_linked", "unknown_frames")},
+            "hub_rx_counters": health.hub_counters,
+            "device_rx_counters": health.device_counters,
+        }
+        return result
+    finally:
+        if dev is not None:
+            dev.close()
+        fl.stop()
+        emu.terminate()
+        try:
+            emu.wait(5)
+        except subprocess.TimeoutExpired:
+            emu.kill()
+            emu.wait(5)
+
+
+def check(r: Dict[str, Any]) -> List[str]:
+    """The soak's claims; returns the violated ones (empty: all hold)."""
+    bad = []
+    if r["bad_reads"]:
+        bad.append(f"{r['bad_reads']} reads returned values never written: {r['bad_values']}")
+    if r["naks"]:
+        bad.append(f"{r['naks']} writes were NAKed (a corrupted frame accepted as valid?)")
+    if not r["acked"] <= r["applied"] <= r["acked"] + r["timeouts"]:
+        bad.append(f"applied {r['applied']} is not within acked {r['acked']} .. acked + timeouts "
+                   f"{r['acked'] + r['timeouts']}")
+    lo, hi = r["events_queued"], r["events_queued"] + 4 * r["selftest_timeouts"]
+    if not lo <= r["events_delivered"] <= hi:
+        bad.append(f"{r['events_delivered']} events delivered, expected {lo}..{hi}")
+    if r["event_seq_gaps_or_dups"]:
+        bad.append(f"{r['event_seq_gaps_or_dups']} event seq steps were not +1 (lost or duplicated)")
+    if not r["event_order_ok"]:
+        bad.append("event values are not the selftest patterns in order")
+    if r["reboots"] or r["state"] != "ready":
+        bad.append(f"session ended {r['state']} after {r['reboots']} reboots")
+    if r["failsafes"] == 0 and r["last_timed_out"] == [] and r["last_acked"] is not None \
+            and r["final_left"] != r["last_acked"]:
+        bad.append(f"left is {r['final_left']}, last acked write was {r['last_acked']}")
+    return bad
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    p = argparse.ArgumentParser(prog="faultlink.soak", description=__doc__.split("\n\n")[0])
+    p.add_argument("--seconds", type=float, default=None, help="run this long (default 75 unless --frames)")
+    p.add_argument("--frames", type=int, default=None, help="run until this many frames went through the proxy")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--json", default=None, help="also write the result here")
+    a = p.parse_args(argv)
+    seconds = a.seconds if a.seconds is not None else (
+        float(os.environ["HUBWIRE_SOAK_SECONDS"]) if os.environ.get("HUBWIRE_SOAK_SECONDS") else None)
+    frames = a.frames if a.frames is not None else (
+        int(os.environ["HUBWIRE_SOAK_FRAMES"]) if os.environ.get("HUBWIRE_SOAK_FRAMES") else None)
+    r = run_soak(seconds=seconds, frames=frames, seed=a.seed, log=lambda s: print(s, file=sys.stderr, flush=True))
+    text = json.dumps(r, indent=1)
+    print(text)
+    if a.json:
+        with open(a.json, "w") as fh:
+            fh.write(text + "\n")
+    bad = check(r)
+    for b in bad:
+        print("FAIL:", b, file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
