@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-examples test-arm test-manifests test-python emulator simuno uno-firmware demo clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-arm test-manifests test-python emulator simuno uno-firmware demo bench clean
 
 all: emulator simuno
 
@@ -28,11 +28,21 @@ uno-firmware:
 	bash tools/arduino/build-sketch.sh examples/Rover arduino:avr:uno $(BUILD)/uno/Rover >/dev/null
 
 test: setup
-	$(MAKE) test-cpp test-examples test-arm test-manifests test-python
+	$(MAKE) test-cpp test-avr-core test-examples test-arm test-manifests test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
 	cd $(BUILD)/cmake && ctest --output-on-failure
+
+# The portable core alone, for the Uno's MCU, warnings as errors (no Arduino.h involved).
+CORE_SOURCES := $(shell find src/hubwire -name '*.cpp')
+test-avr-core:
+	@mkdir -p $(BUILD)/avr-core
+	@for f in $(CORE_SOURCES); do \
+	  avr-g++ -std=gnu++11 -mmcu=atmega328p -Os -Wall -Wextra -Werror -fno-exceptions -fno-rtti \
+	    -c $$f -o $(BUILD)/avr-core/$$(basename $$f).o || exit 1; \
+	done
+	@echo "test-avr-core: $(words $(CORE_SOURCES)) files compile for atmega328p with -Wall -Wextra -Werror"
 
 test-examples:
 	bash tools/arduino/build-all.sh

@@ -112,7 +112,7 @@ times per byte, 1.09x / 1.14x the real 8N1 time). What the round trip is made of
 - device: `R battery` costs the Uno {dev_ms:.2f} ms of CPU from the first byte read to the reply queued
   (row 2, region 19; {cyc.get('19', 0):,.0f} cycles), most of it `find(5)` replaying declarations;
 - hub + pty + Python threads: {emu:.2f} ms against the emulator (same library, no UART, native speed);
-- simulator artefacts: simavr's `uart_pty` moves host bytes into the AVR from a 1 kHz cycle timer
+- simulator artefacts (tools/simuno/README.md): simavr's `uart_pty` moves host bytes into the AVR from a 1 kHz cycle timer
   (up to 1 ms added per request) and its UART counts 11 bits per byte.
 An estimate for a real Uno at 115200 is wire + device + hub = {verdicts[115200][1]:.2f} + {dev_ms:.2f} + {emu:.2f}
 = {verdicts[115200][1] + dev_ms + emu:.2f} ms (target {verdicts[115200][2]:.2f}); at 1 Mbaud

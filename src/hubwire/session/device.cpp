@@ -67,37 +67,15 @@ Device::Builder& Device::Builder::onChange(void (*fn)()) {
 }
 
 Device::Device(ByteStream& stream, Clock& clock)
-    : stream_(stream),
+    : DeviceState(),  // all zero
+      stream_(stream),
       clock_(clock),
       rx_(rxBuf_, sizeof(rxBuf_)),
       tx_(txBuf_, sizeof(txBuf_)),
-      declarations_(nullptr),
-      builder_(*this),
-      mode_(kIdle),
-      skip_(false),
-      pending_(false),
-      json_(nullptr),
-      channelCount_(0),
-      error_(kSetupNoDeclarations),
-      errorChannel_(0),
-      descLength_(0),
-      descHash_(0),
-      nonce_(0),
-      hubNonce_(0),
-      started_(false),
-      linked_(false),
-      hubKnown_(false),
-      peerMax_(HUBWIRE_MAX_PAYLOAD),
-      peerBeatMs_(HUBWIRE_HEARTBEAT_MS),
-      onLinkUp_(nullptr),
-      onLinkLost_(nullptr),
-      eventHead_(0),
-      eventCount_(0),
-      eventSeq_(0),
-      eventInFlight_(false) {
-#if HUBWIRE_MAX_STREAMS > 0
-  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
-#endif
+      builder_(*this) {
+  error_ = kSetupNoDeclarations;
+  peerMax_ = HUBWIRE_MAX_PAYLOAD;
+  peerBeatMs_ = HUBWIRE_HEARTBEAT_MS;
 }
 
 Device::Builder& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {

@@ -67,7 +67,68 @@ struct ChannelInfo {
   uint8_t* eventId;  // events: the handle's id, set by begin()
 };
 
-class Device {
+// Everything a Device changes while it runs, kept apart from its references so that one
+// value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
+struct DeviceState {
+  enum Mode : uint8_t { kIdle, kCheck, kFind, kDescribe, kFailsafe };
+
+  uint8_t rxBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+  uint8_t txBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+
+  // Declarations and the visit in progress.
+  void (*declarations_)();
+  Mode mode_;
+  uint8_t visitId_;   // id of the channel being visited (1-based, 0 before the first)
+  uint8_t target_;    // kFind: wanted id
+  bool skip_;         // kFind: target already found; ignore the remaining declarations
+  bool pending_;      // a visited channel awaits finishChannel()
+  JsonWindow* json_;  // kDescribe
+  uint8_t channelCount_;
+  SetupError error_;
+  uint8_t errorChannel_;
+  uint16_t descLength_;
+  uint32_t descHash_;
+
+  // Session.
+  uint32_t seed_, nonce_, hubNonce_;
+  bool started_, linked_, hubKnown_;
+  uint8_t peerMax_;
+  uint16_t peerBeatMs_;
+  uint32_t lastRx_, lastBeat_, lastAnnounce_;
+  uint16_t beatCounter_;
+  bool beatSent_;
+  void (*onLinkUp_)();
+  void (*onLinkLost_)();
+
+  // Duplicate suppression: the last hub transaction and, for a control, the answer it got.
+  bool lastTxnValid_, lastTxnControl_;
+  uint8_t lastTxnSeq_, lastTxnId_;
+  uint8_t replyType_, replyLen_;
+  uint8_t replyData_[HUBWIRE_MAX_RETURN];
+
+  // Events: a ring; only the head is in flight.
+  struct QueuedEvent {
+    uint8_t id, len;
+    uint8_t data[HUBWIRE_EVENT_MAX_PAYLOAD];
+  };
+  QueuedEvent events_[HUBWIRE_EVENT_QUEUE];
+  uint8_t eventHead_, eventCount_, eventSeq_;
+  bool eventInFlight_;
+  uint32_t eventSentAt_;
+
+  // Subscriptions (id 0 = free slot).
+  // Times are the low 16 bits of millis(): intervals stay below 65 s, so differences are exact.
+  struct Subscription {
+    uint8_t id, seq;
+    uint16_t interval, due, last;
+    bool first;
+  };
+#if HUBWIRE_MAX_STREAMS > 0
+  Subscription streams_[HUBWIRE_MAX_STREAMS];
+#endif
+};
+
+class Device : private DeviceState {
  public:
   enum Flags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
 
@@ -181,8 +242,6 @@ class Device {
   const LinkCounters& counters() const { return rx_.counters; }
 
  private:
-  enum Mode : uint8_t { kIdle, kCheck, kFind, kDescribe, kFailsafe };
-
   Builder& declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access);
   Builder& declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk);
   void finishChannel();  // the visited channel is complete: act on it for the current mode
@@ -245,65 +304,11 @@ class Device {
 
   ByteStream& stream_;
   Clock& clock_;
-  uint8_t rxBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
-  uint8_t txBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
   FrameReceiver rx_;
   FrameWriter tx_;
-
-  // Declarations and the visit in progress.
-  void (*declarations_)();
   Text name_, firmware_;
-  ChannelInfo info_;
+  ChannelInfo info_;  // the channel being visited
   Builder builder_;
-  Mode mode_;
-  uint8_t visitId_ = 0;   // id of the channel being visited (1-based, 0 before the first)
-  uint8_t target_ = 0;    // kFind: wanted id
-  bool skip_;         // kFind: target already found; ignore the remaining declarations
-  bool pending_;      // a visited channel awaits finishChannel()
-  JsonWindow* json_;  // kDescribe
-  uint8_t channelCount_;
-  SetupError error_;
-  uint8_t errorChannel_;
-  uint16_t descLength_;
-  uint32_t descHash_;
-
-  // Session.
-  uint32_t seed_ = 0, nonce_, hubNonce_;
-  bool started_, linked_, hubKnown_;
-  uint8_t peerMax_;
-  uint16_t peerBeatMs_;
-  uint32_t lastRx_ = 0, lastBeat_ = 0, lastAnnounce_ = 0;
-  uint16_t beatCounter_ = 0;
-  bool beatSent_ = false;
-  void (*onLinkUp_)();
-  void (*onLinkLost_)();
-
-  // Duplicate suppression: the last hub transaction and, for a control, the answer it got.
-  bool lastTxnValid_ = false, lastTxnControl_ = false;
-  uint8_t lastTxnSeq_ = 0, lastTxnId_ = 0;
-  uint8_t replyType_ = 0, replyLen_ = 0;
-  uint8_t replyData_[HUBWIRE_MAX_RETURN];
-
-  // Events: a ring; only the head is in flight.
-  struct QueuedEvent {
-    uint8_t id, len;
-    uint8_t data[HUBWIRE_EVENT_MAX_PAYLOAD];
-  };
-  QueuedEvent events_[HUBWIRE_EVENT_QUEUE];
-  uint8_t eventHead_, eventCount_, eventSeq_;
-  bool eventInFlight_;
-  uint32_t eventSentAt_ = 0;
-
-  // Subscriptions (id 0 = free slot).
-  // Times are the low 16 bits of millis(): intervals stay below 65 s, so differences are exact.
-  struct Subscription {
-    uint8_t id, seq;
-    uint16_t interval, due, last;
-    bool first;
-  };
-#if HUBWIRE_MAX_STREAMS > 0
-  Subscription streams_[HUBWIRE_MAX_STREAMS];
-#endif
 };
 
 }  // namespace hubwire
