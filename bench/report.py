@@ -67,9 +67,10 @@ def main() -> None:
         if name not in parts:
             table.append([name, "", "not run (see the bench/run.sh output)", "**failed**", "", ""])
             continue
-        for r in parts[name]["rows"]:
+        for i, r in enumerate(parts[name]["rows"]):
+            scale = SCALE.get(name, "") if i == 0 and SCALE.get(name, "") not in r.get("why", "") else ""
             table.append([r["item"], r["target"], r["value"], r["verdict"], f"`{r['command']}`",
-                          "; ".join(x for x in (r.get("why", ""), SCALE.get(name, "")) if x)])
+                          "; ".join(x for x in (r.get("why", ""), scale) if x)])
     info = [
         ["date (UTC)", datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M")],
         ["host", f"{platform.system()} {platform.release()} {platform.machine()}"],

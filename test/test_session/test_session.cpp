@@ -2,7 +2,9 @@
 // retries, duplicate suppression, link loss and failsafe, stream timing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 #include <nlohmann/json.hpp>
 
@@ -285,6 +287,31 @@ TEST_F(Session, DescriptorIsValidJsonMatchingHashAndDeclarations) {
   EXPECT_FALSE(j["ch"][7].contains("rt"));
   EXPECT_EQ(j["ch"][8]["a"], "e");
   EXPECT_EQ(j["ch"][8]["t"], "u16");
+}
+
+// Chunks are served from a resume point when asked in order; any order must give the same bytes.
+TEST_F(Session, ChunksInAnyOrderAndSizeReassembleTheSameDescriptor) {
+  link();
+  std::string inOrder = descriptor();
+  std::string shuffled(inOrder.size(), '?');
+  // Pieces of varied sizes covering the whole descriptor, asked for in a scrambled order.
+  std::vector<std::pair<uint16_t, uint8_t>> pieces;
+  const uint8_t wants[] = {5, 1, 28, 13, 20, 7};
+  for (uint16_t off = 0, k = 0; off < inOrder.size(); off = (uint16_t)(off + wants[k++ % 6]))
+    pieces.push_back({off, wants[k % 6]});
+  std::mt19937 rng(7);
+  std::shuffle(pieces.begin() + 1, pieces.end() - 3, rng);  // keep some in-order runs too
+  for (auto& piece : pieces) {
+    Bytes req(3);
+    storeU16(&req[0], piece.first);
+    req[2] = piece.second;
+    RxFrame f = transact('J', 0, req);
+    ASSERT_EQ(f.type, 'J');
+    ASSERT_EQ(loadU16(&f.payload[0]), piece.first);
+    shuffled.replace(piece.first, f.payload.size() - 4, std::string(f.payload.begin() + 4, f.payload.end()));
+  }
+  EXPECT_EQ(shuffled.find('?'), std::string::npos) << "some bytes never came";
+  EXPECT_EQ(shuffled, inOrder);
 }
 
 TEST_F(Session, ChunksRespectTheWantedSizeAndOffsets) {
@@ -607,6 +634,13 @@ void dupName() {
   bad->expose("b", lamp);
   bad->expose("a", hidden);
 }
+void dupLater() {
+  bad->expose("a", speed);
+  bad->expose("b", lamp);
+  bad->expose("c", hidden);
+  bad->expose("d", counts);
+  bad->expose("b", label);
+}
 void badLayout() { bad->expose("p", pose, "x:f32,ok:u8"); }  // misses t:i16[2]
 void badSyntax() { bad->expose("p", pose, "x:f32,ok:u9,t:i16[2]"); }
 uint8_t big[HUBWIRE_MAX_PAYLOAD];
@@ -622,7 +656,7 @@ TEST(Declarations, ErrorsAreReportedWithTheChannel) {
     void (*fn)();
     SetupError err;
     uint8_t channel;
-  } cases[] = {{badName, kSetupBadName, 1},    {dupName, kSetupBadName, 3}, {badLayout, kSetupBadLayout, 1},
+  } cases[] = {{badName, kSetupBadName, 1},    {dupName, kSetupBadName, 3}, {dupLater, kSetupBadName, 5}, {badLayout, kSetupBadLayout, 1},
                {badSyntax, kSetupBadLayout, 1}, {tooBig, kSetupTooLarge, 1}};
   for (auto& k : cases) {
     EXPECT_FALSE(d.begin("x", k.fn));

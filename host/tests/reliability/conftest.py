@@ -107,6 +107,18 @@ def fd_count() -> int:
     return len(os.listdir("/proc/self/fd"))
 
 
+def tty_fds() -> int:
+    """Open file descriptors on ttys/ptys (the hub's serial ports), ignoring pipes to child processes."""
+    n = 0
+    for fd in os.listdir("/proc/self/fd"):
+        try:
+            target = os.readlink(f"/proc/self/fd/{fd}")
+        except OSError:
+            continue
+        n += target.startswith(("/dev/pts/", "/dev/tty", "/dev/ptmx"))
+    return n
+
+
 def hubwire_threads() -> List[str]:
     return sorted(t.name for t in threading.enumerate() if t.name.startswith("hubwire"))
 

@@ -338,8 +338,8 @@ def test_values_out_of_range_are_refused_before_sending(emu: Any) -> None:
 
 
 @pytest.mark.xfail(strict=True, reason="hub: Channel.check lets NaN through a declared min..max (every "
-                   "comparison with NaN is false), and the device's range check does the same: a NaN "
-                   "reaches a motor declared -1..1")
+                   "comparison with NaN is false) and sends it; only the device's NAK OUT_OF_RANGE stops it "
+                   "(NakError after a round trip instead of InvalidValue before sending)")
 def test_nan_is_refused_for_a_ranged_channel(emu: Any) -> None:
     with hubwire.connect(emu.link, cache_dir=False) as dev:
         with pytest.raises(InvalidValue) as e:

@@ -81,6 +81,13 @@ Device::Device(ByteStream& stream, Clock& clock)
 Device::Builder& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {
   if (pending_) finishChannel();
   ++visitId_;
+  // Build only the channels this visit needs: one for a find, those in the window for a chunk.
+  if (mode_ == kFind) {
+    skip_ = visitId_ != target_;
+  } else if (mode_ == kDescribe) {
+    skip_ = visitId_ < resumeFrom_ || json_->done();
+    if (visitId_ == resumeFrom_) json_->seek(resumePos_);
+  }
   if (!skip_) {
     info_ = ChannelInfo();
     info_.name = name;
@@ -122,8 +129,7 @@ void Device::finishChannel() {
     case kCheck:
       checkChannel();
       break;
-    case kFind:
-      if (visitId_ == target_) skip_ = true;  // keep info_ as it is
+    case kFind:  // info_ holds the target: the other channels are skipped
       break;
     case kDescribe:
       describeChannel();
@@ -143,7 +149,7 @@ void Device::finishChannel() {
 bool Device::find(uint8_t id) {
   if (id == 0 || id > channelCount_) return false;
   visit(kFind, id);
-  return skip_;
+  return true;
 }
 
 void Device::checkChannel() {
@@ -174,6 +180,16 @@ void Device::checkChannel() {
 #endif
   }
   if (e == kSetupOk && info_.eventId) *info_.eventId = id;
+  if (e == kSetupOk && id <= HUBWIRE_MAX_CHANNELS) {  // remember a name-hash clash; begin() checks it
+    uint16_t h = 0x1D0F;
+    for (uint16_t i = 0; info_.name.at(i); ++i) h = (uint16_t)((h ^ (uint8_t)info_.name.at(i)) * 0x0101u + 7);
+    for (uint8_t other = 1; other < id && !dupA_; ++other)
+      if (nameHashes_[other - 1] == h) {
+        dupA_ = other;
+        dupB_ = id;
+      }
+    nameHashes_[id - 1] = h;
+  }
   if (e != kSetupOk) {
     error_ = e;
     errorChannel_ = id;
@@ -228,6 +244,10 @@ static void putType(JsonWindow& j, const char* typeKey, const char* countKey, co
 
 void Device::describeChannel() {
   JsonWindow& j = *json_;
+  if (!j.done()) {  // the last channel starting inside the window: the next chunk resumes here
+    resumeCandidate_ = visitId_;
+    resumeCandidatePos_ = j.length();
+  }
   if (visitId_ > 1) j.put(',');
   j.put('{');
   j.noComma();
@@ -263,6 +283,26 @@ void Device::describeChannel() {
 uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
   JsonWindow j(start, len, out);
   json_ = &j;
+  // Resume at the channel the previous chunk ended in, when this chunk starts after it.
+  resumeFrom_ = (out && resumeId_ && start >= resumePos_) ? resumeId_ : 0;
+  resumeCandidate_ = 0;
+  describeAll(j);
+  json_ = nullptr;
+  if (out && resumeCandidate_) {
+    resumeId_ = resumeCandidate_;
+    resumePos_ = resumeCandidatePos_;
+  }
+  return j.length();
+}
+
+void Device::describeAll(JsonWindow& j) {
+  if (!resumeFrom_) describeHead(j);
+  visit(kDescribe);
+  j.put(']');
+  j.put('}');
+}
+
+void Device::describeHead(JsonWindow& j) {
   j.put('{');
   j.key("p");
   j.uinteger(kProtocolVersion);
@@ -274,12 +314,6 @@ uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
   }
   j.key("ch");
   j.put('[');
-  visit(kDescribe);
-  j.put(']');
-  j.put('}');
-  json_ = nullptr;
-  descHash_ = j.hash();
-  return j.length();
 }
 
 // ---------------------------------------------------------------- running
@@ -291,26 +325,49 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
   channelCount_ = 0;
   errorChannel_ = 0;
   error_ = declarations ? kSetupOk : kSetupNoDeclarations;
+  uint16_t hashes[HUBWIRE_MAX_CHANNELS];
+  nameHashes_ = hashes;
+  dupA_ = dupB_ = 0;
   if (error_ == kSetupOk) visit(kCheck);
+  nameHashes_ = nullptr;
   if (error_ == kSetupOk && !validName(name)) error_ = kSetupBadName;
-  // Unique names: pairwise comparison by nested finds into a copy (begin() only).
-  for (uint8_t a = 2; a <= channelCount_ && error_ == kSetupOk; ++a) {
-    find(a);
-    Text na = info_.name;
-    for (uint8_t b = 1; b < a; ++b) {
-      find(b);
-      if (sameText(na, info_.name)) {
-        error_ = kSetupBadName;
-        errorChannel_ = a;
-        break;
+  // Unique names: one pass hashed them; only a hash clash needs the names compared. A clash of
+  // different names (rare) falls back to comparing every pair.
+  if (error_ == kSetupOk && dupA_) {
+    find(dupA_);
+    Text a = info_.name;
+    find(dupB_);
+    bool same = sameText(a, info_.name);
+    for (uint8_t x = 2; x <= channelCount_ && !same; ++x) {
+      find(x);
+      Text nx = info_.name;
+      for (uint8_t y = 1; y < x && !same; ++y) {
+        find(y);
+        if (sameText(nx, info_.name)) {
+          same = true;
+          dupB_ = x;
+        }
       }
+    }
+    if (same) {
+      error_ = kSetupBadName;
+      errorChannel_ = dupB_;
     }
   }
   if (error_ != kSetupOk) {
     started_ = false;
     return false;
   }
-  descLength_ = describe(0, 0, nullptr);
+  {
+    JsonWindow whole(0, 0, nullptr);  // count and hash every character once
+    json_ = &whole;
+    resumeFrom_ = 0;
+    describeAll(whole);
+    json_ = nullptr;
+    descLength_ = whole.length();
+    descHash_ = whole.hash();
+  }
+  resumeId_ = 0;
   seed_ = seed;
   nonce_ = 0;
   started_ = true;

@@ -88,6 +88,12 @@ struct DeviceState {
   uint8_t errorChannel_;
   uint16_t descLength_;
   uint32_t descHash_;
+  // Where a channel's JSON starts, from the last chunk served: the next chunk resumes there
+  // instead of producing the descriptor from its first character again.
+  uint8_t resumeId_, resumeCandidate_, resumeFrom_;
+  uint16_t resumePos_, resumeCandidatePos_;
+  uint16_t* nameHashes_;  // begin() only: one per channel, to find duplicate names in one pass
+  uint8_t dupA_, dupB_;   // begin() only: two channels whose names share a hash
 
   // Session.
   uint32_t seed_, nonce_, hubNonce_;
@@ -248,7 +254,9 @@ class Device : private DeviceState {
   void visit(Mode mode, uint8_t target = 0);
   bool find(uint8_t id);  // info_ describes channel id afterwards
   void describeChannel();
-  uint16_t describe(uint16_t start, uint16_t len, uint8_t* out);  // returns the total length
+  uint16_t describe(uint16_t start, uint16_t len, uint8_t* out);  // copies a window of the JSON
+  void describeAll(JsonWindow& j);
+  void describeHead(JsonWindow& j);  // {"p":1,"n":...,"ch":[
   void checkChannel();
   bool emitRaw(uint8_t id, const void* value, ValueType type);
 

@@ -23,6 +23,10 @@ class JsonWindow {
   void uinteger(uint32_t v);
 
   uint16_t length() const { return pos_; }
+  // True once every character of the window has been produced (never when only counting).
+  bool done() const { return out_ && pos_ >= start_ + len_; }
+  // Continue counting from pos (resuming after characters produced by an earlier pass).
+  void seek(uint16_t pos) { pos_ = pos; }
   uint32_t hash() const { return hash_; }
   void comma() { needComma_ = true; }
   void noComma() { needComma_ = false; }

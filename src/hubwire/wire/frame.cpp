@@ -16,7 +16,7 @@ void FrameReceiver::reset() {
   started_ = false;
 }
 
-bool FrameReceiver::feed(uint8_t byte) {
+bool FrameReceiver::feedSlow(uint8_t byte) {
   if (byte == 0) {  // delimiter: judge what was collected, then start afresh
     bool wasStarted = started_, overflowed = overflow_, complete = (left_ == 0);
     uint16_t len = len_;

@@ -39,7 +39,15 @@ class FrameReceiver {
   FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), cap_(capacity) { reset(); }
 
   // Takes one byte; true when it completed a valid frame, which frame() then describes.
-  bool feed(uint8_t byte);
+  // Most bytes are data inside a COBS block: that case is inline, the rest is feedSlow().
+  bool feed(uint8_t byte) {
+    if (byte != 0 && left_ != 0 && len_ < cap_) {
+      buf_[len_++] = byte;
+      --left_;
+      return false;
+    }
+    return feedSlow(byte);
+  }
   const Frame& frame() const { return frame_; }
   // Forget any partial frame (the next byte starts a new one).
   void reset();
@@ -47,6 +55,8 @@ class FrameReceiver {
   LinkCounters counters;
 
  private:
+  bool feedSlow(uint8_t byte);
+
   uint8_t* buf_;
   uint16_t cap_;
   uint16_t len_;
