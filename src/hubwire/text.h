@@ -39,6 +39,13 @@ struct Text {
 
 inline Text flashText(const char* s) { return Text(s, true); }
 
+// A string literal kept in flash on AVR (where literals otherwise cost RAM), as a Text.
+#if defined(__AVR__)
+#define HUBWIRE_TEXT(s) ::hubwire::flashText(PSTR(s))
+#else
+#define HUBWIRE_TEXT(s) ::hubwire::Text(s)
+#endif
+
 }  // namespace hubwire
 
 #endif

@@ -209,7 +209,7 @@ static void putAccess(JsonWindow& j, uint8_t a) {
   j.put('"');
 }
 
-static void putType(JsonWindow& j, const char* typeKey, const char* countKey, const ValueType& t) {
+static void putType(JsonWindow& j, Text typeKey, Text countKey, const ValueType& t) {
   j.key(typeKey);
   j.text(typeName(t.code));
   if (t.count) {
@@ -217,7 +217,7 @@ static void putType(JsonWindow& j, const char* typeKey, const char* countKey, co
     j.uinteger(t.count);
   }
   if (t.code != kStruct) return;
-  j.key("f");
+  j.key(HUBWIRE_TEXT("f"));
   j.put('[');
   LayoutReader r(t.layout);
   LayoutField f;
@@ -227,14 +227,14 @@ static void putType(JsonWindow& j, const char* typeKey, const char* countKey, co
     first = false;
     j.put('{');
     j.noComma();
-    j.key("n");
+    j.key(HUBWIRE_TEXT("n"));
     j.put('"');
     for (uint16_t i = 0; i < f.nameLen; ++i) j.put(t.layout.at((uint16_t)(f.nameStart + i)));
     j.put('"');
-    j.key("t");
+    j.key(HUBWIRE_TEXT("t"));
     j.text(typeName(f.code));
     if (f.count) {
-      j.key("c");
+      j.key(HUBWIRE_TEXT("c"));
       j.uinteger(f.count);
     }
     j.put('}');
@@ -251,30 +251,31 @@ void Device::describeChannel() {
   if (visitId_ > 1) j.put(',');
   j.put('{');
   j.noComma();
-  j.key("id");
+  j.key(HUBWIRE_TEXT("id"));
   j.uinteger(visitId_);
-  j.key("n");
+  j.key(HUBWIRE_TEXT("n"));
   j.text(info_.name);
-  j.key("a");
+  j.key(HUBWIRE_TEXT("a"));
   putAccess(j, info_.access);
-  putType(j, "t", "c", info_.type);
-  if ((info_.access & kCallable) && info_.ret.code != kVoid) putType(j, "rt", "rc", info_.ret);
+  putType(j, HUBWIRE_TEXT("t"), HUBWIRE_TEXT("c"), info_.type);
+  if ((info_.access & kCallable) && info_.ret.code != kVoid)
+    putType(j, HUBWIRE_TEXT("rt"), HUBWIRE_TEXT("rc"), info_.ret);
   if (!info_.unit.empty()) {
-    j.key("u");
+    j.key(HUBWIRE_TEXT("u"));
     j.text(info_.unit);
   }
   if (info_.flags & kHasRange) {
-    j.key("min");
+    j.key(HUBWIRE_TEXT("min"));
     j.number(info_.min);
-    j.key("max");
+    j.key(HUBWIRE_TEXT("max"));
     j.number(info_.max);
   }
   if (info_.flags & kHasFailsafe) {
-    j.key("fs");
+    j.key(HUBWIRE_TEXT("fs"));
     j.number(info_.failsafe);
   }
   if (!info_.description.empty()) {
-    j.key("d");
+    j.key(HUBWIRE_TEXT("d"));
     j.text(info_.description);
   }
   j.put('}');
@@ -304,15 +305,15 @@ void Device::describeAll(JsonWindow& j) {
 
 void Device::describeHead(JsonWindow& j) {
   j.put('{');
-  j.key("p");
+  j.key(HUBWIRE_TEXT("p"));
   j.uinteger(kProtocolVersion);
-  j.key("n");
+  j.key(HUBWIRE_TEXT("n"));
   j.text(name_);
   if (!firmware_.empty()) {
-    j.key("fw");
+    j.key(HUBWIRE_TEXT("fw"));
     j.text(firmware_);
   }
-  j.key("ch");
+  j.key(HUBWIRE_TEXT("ch"));
   j.put('[');
 }
 
@@ -380,12 +381,10 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
 // the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
 // connection even where a simulated or freshly powered board repeats everything else.
 void Device::drawNonce(uint32_t hubNonce) {
-  uint32_t h = kFnvOffset, us = clock_.micros();
-  for (uint8_t i = 0; i < 32; i += 8) {
-    h = fnv1a(h, (uint8_t)(seed_ >> i));
-    h = fnv1a(h, (uint8_t)(us >> i));
-    h = fnv1a(h, (uint8_t)(hubNonce >> i));
-  }
+  uint32_t parts[3] = {seed_, clock_.micros(), hubNonce};
+  const uint8_t* bytes = (const uint8_t*)parts;
+  uint32_t h = kFnvOffset;
+  for (uint8_t i = 0; i < sizeof(parts); ++i) h = fnv1a(h, bytes[i]);
   nonce_ = h ? h : 1;  // never 0: the protocol reserves it
 }
 

@@ -34,12 +34,10 @@ void JsonWindow::text(Text t) {
   put('"');
 }
 
-void JsonWindow::key(const char* k) {
+void JsonWindow::key(Text k) {
   if (needComma_) put(',');
   needComma_ = true;
-  put('"');
-  raw(k);
-  put('"');
+  text(k);  // keys are plain letters: quoting is all the escaping they need
   put(':');
 }
 

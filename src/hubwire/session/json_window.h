@@ -18,7 +18,7 @@ class JsonWindow {
   void put(char c);
   void raw(const char* s);  // RAM literal, no escaping
   void text(Text t);        // quoted and escaped
-  void key(const char* k);  // ,"k": or "k": as needed
+  void key(Text k);         // ,"k": or "k": as needed
   void number(double v);
   void uinteger(uint32_t v);
 
