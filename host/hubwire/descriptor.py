@@ -99,7 +99,8 @@ class Channel:
 
             items = v if isinstance(v, tuple) else (v,)
             for x in items:
-                if (self.min is not None and x < self.min) or (self.max is not None and x > self.max):
+                if (x != x  # NaN: never inside a declared range
+                        or (self.min is not None and x < self.min) or (self.max is not None and x > self.max)):
                     raise InvalidValue(
                         f"{self.name}: {x} is outside the declared range {_fmt(self.min)}..{_fmt(self.max)}",
                         NakCode.OUT_OF_RANGE)

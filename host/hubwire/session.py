@@ -30,7 +30,7 @@ from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Tuple
 import serial
 
 from .cache import DescriptorCache
-from .descriptor import Descriptor, parse_descriptor
+from .descriptor import MAX_DESCRIPTOR_SIZE, Descriptor, parse_descriptor
 from .errors import DescriptorError, HubwireError, InvalidValue, LinkLost, NakError, ProtocolVersionError, Timeout
 from .wire import messages as m
 from .wire.frame import Frame, FrameDecoder, encode_frame
@@ -44,6 +44,10 @@ HELLO_INTERVAL = 0.1
 READ_TIMEOUT = 0.01
 CHUNK_WINDOW = 4
 HUB_MAX_PAYLOAD = 255
+#: events waiting in one dev.events() iterator; beyond it the oldest is dropped (and counted)
+EVENT_QUEUE_LIMIT = 4096
+#: callbacks waiting on the dispatcher; beyond it new events are not acked (the device retries them)
+DISPATCH_LIMIT = 1024
 
 
 class State(enum.Enum):
@@ -155,6 +159,20 @@ class _Gate:
                 self._cv.notify_all()
 
 
+def _put_dropping_oldest(q: "queue.Queue[Any]", item: Any, stats: Dict[str, int]) -> None:
+    """Put ``item``; if the (bounded) queue is full, drop its oldest entry first and count it."""
+    while True:
+        try:
+            q.put_nowait(item)
+            return
+        except queue.Full:
+            try:
+                q.get_nowait()
+                stats["events_dropped"] += 1
+            except queue.Empty:
+                pass
+
+
 class _Subscription:
     """Hub-side record of one stream consumer."""
 
@@ -239,6 +257,7 @@ class Session:
         self._discovery_error: Optional[BaseException] = None
         self._discovery_retry_at = 0.0
         self._fatal: Optional[BaseException] = None
+        self._progress_at = 0.0
         self._linked = False
         self._hello_count = 0
 
@@ -272,7 +291,7 @@ class Session:
             "chunk_requests": 0, "retries": 0, "events": 0, "duplicate_events": 0, "reboots": 0,
             "link_lost": 0, "link_restored": 0, "rehandshakes": 0, "port_reopens": 0,
             "unknown_frames": 0, "unmatched_answers": 0, "cache_hits": 0, "downloads": 0, "samples": 0,
-            "not_linked": 0,
+            "not_linked": 0, "events_deferred": 0, "events_dropped": 0,
         }
         #: test hook: when set, nothing is written to the port (simulates a silent hub)
         self.tx_paused = False
@@ -323,13 +342,19 @@ class Session:
                     raise Timeout(f"no Hubwire device answered on {self.url} within {self.connect_timeout:g} s"
                                   f" (hello sent every {HELLO_INTERVAL * 1000:.0f} ms){noise}")
                 self._cv.wait(left)
-            # the handshake is done; discovery runs on its own time limits (download retries)
+            # the handshake is done; discovery may take longer than the deadline as long as it makes
+            # progress (a big descriptor on a slow line), but not connect_timeout without any
+            self._progress_at = time.monotonic()
             while self.state is not State.READY and self._fatal is None:
                 if self._discovery_error is not None:
                     raise self._discovery_error
                 if self.state is State.CLOSED:
                     raise HubwireError("session closed while connecting")
-                self._cv.wait(0.5)
+                idle = time.monotonic() - self._progress_at
+                if idle >= self.connect_timeout:
+                    raise Timeout(f"device on {self.url} answered the handshake but its descriptor did not "
+                                  f"arrive: no progress for {self.connect_timeout:g} s")
+                self._cv.wait(min(0.5, self.connect_timeout - idle))
             if self._fatal is not None:
                 raise self._fatal
 
@@ -364,7 +389,7 @@ class Session:
         if self._dispatcher is not None and self._dispatcher is not threading.current_thread():
             self._dispatcher.join(2.0)
         for q in self._event_queues:
-            q.put(None)  # type: ignore[arg-type]
+            _put_dropping_oldest(q, None, self.stats)
 
     # --------------------------------------------------------------------------- callbacks API
 
@@ -413,13 +438,13 @@ class Session:
         first into the next queue created (for the channel ``names`` it is meant for, if given), so
         none is lost between connect() and the first listener.
         """
-        q: "queue.Queue[Event]" = queue.Queue()
+        q: "queue.Queue[Event]" = queue.Queue(EVENT_QUEUE_LIMIT)
         with self._lock:
             self._event_queues.append(q)
             keep: Deque[Event] = deque(maxlen=self._backlog.maxlen)
             for ev in self._backlog:
                 if names is None or ev.name in names:
-                    q.put(ev)
+                    _put_dropping_oldest(q, ev, self.stats)
                 else:
                     keep.append(ev)
             self._backlog = keep
@@ -738,6 +763,10 @@ class Session:
                      and self._descriptor_nonce == self.device_hello.nonce)
             if not ready:
                 return  # not acked: the device retries, we deliver it once we can decode it
+            if self._dispatch_q.qsize() >= DISPATCH_LIMIT:
+                # callbacks lag behind: not acked, so the device keeps it and retries (flow control)
+                self.stats["events_deferred"] += 1
+                return
             self._send_frame(m.ACK, f.seq, f.id)
             if self._last_event_seq == f.seq:
                 self.stats["duplicate_events"] += 1
@@ -761,7 +790,7 @@ class Session:
             for cb in every:
                 self._dispatch(cb, ev)
             for q in self._event_queues:
-                q.put(ev)
+                _put_dropping_oldest(q, ev, self.stats)
             if not named and not every and not self._event_queues:
                 self._backlog.append(ev)
 
@@ -809,7 +838,7 @@ class Session:
             if err is not None:
                 self._discovery_error = err
                 self._discovery_retry_at = time.monotonic() + 1.0
-                if not isinstance(err, LinkLost):
+                if not isinstance(err, LinkLost) and self.state is not State.CLOSED:
                     log.warning("hubwire: discovery on %s failed: %s", self.url, err)
                 self._cv.notify_all()
                 return
@@ -828,6 +857,10 @@ class Session:
                     self._dispatch(cb, desc)
 
     def _load_descriptor(self, hello: m.Hello) -> Descriptor:
+        if hello.descriptor_length > MAX_DESCRIPTOR_SIZE:
+            raise DescriptorError(
+                f"descriptor: the device announces {hello.descriptor_length} bytes, more than the hub's "
+                f"limit of {MAX_DESCRIPTOR_SIZE} bytes (not downloaded)")
         cur = self.descriptor
         if cur is not None and cur.hash == hello.descriptor_hash and len(cur.raw) == hello.descriptor_length:
             self.stats["cache_hits"] += 1
@@ -923,6 +956,7 @@ class Session:
                                         have[off + i] = 1
                                         buf[off + i] = b
                                         received += 1
+                                self._progress_at = time.monotonic()
                                 end = off + len(c.data)
                                 if end < total and not have[end] and end not in inflight and len(c.data) < want:
                                     gaps.append(end)  # shorter answer than asked: fetch the rest

@@ -43,6 +43,9 @@ def test_channel_range_check() -> None:
     with pytest.raises(InvalidValue) as e:
         left.check(1.5)
     assert e.value.code == NakCode.OUT_OF_RANGE and "-1..1" in str(e.value)
+    with pytest.raises(InvalidValue) as e:
+        left.check(float("nan"))  # NaN compares false with everything: never inside a range
+    assert e.value.code == NakCode.OUT_OF_RANGE
 
 
 def doc(**chan: Any) -> bytes:

@@ -126,3 +126,24 @@ def test_same_nonce_but_new_descriptor_is_a_reboot(cache_dir: str) -> None:
         assert dev.session.stats["reboots"] == 1 and dev.session.stats["downloads"] == 2
         dev.y = 7
         assert dev.y == 7
+
+
+def test_descriptor_over_the_cap_is_refused_from_the_hello(cache_dir: str) -> None:
+    big = b'{"p":1,"n":"big","ch":[],"x":"' + b"y" * 20000 + b'"}'
+    with FakeDevice(big) as fake:
+        with pytest.raises(DescriptorError) as e:
+            hubwire.connect(fake.path, cache_dir=cache_dir, timeout=2)
+        assert fake.chunk_requests == {}  # nothing downloaded
+    assert "20032 bytes" in str(e.value) and "16384" in str(e.value)
+
+
+def test_connect_deadline_holds_when_the_descriptor_never_comes(cache_dir: str) -> None:
+    import time
+
+    with FakeDevice(drop_chunk=lambda off, nth: True) as fake:
+        t = time.monotonic()
+        with pytest.raises(Timeout) as e:
+            hubwire.connect(fake.path, cache_dir=cache_dir, timeout=0.5, retry_timeout=0.5, tries=10)
+        took = time.monotonic() - t
+        assert fake.chunk_requests  # it was asked
+    assert took < 2.0 and "descriptor did not arrive" in str(e.value)

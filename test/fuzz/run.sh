@@ -9,7 +9,8 @@
 #
 # Seeds come from test/vectors/*.json (test/fuzz/make_corpus.py, at build time); the corpus grows
 # in build/fuzz/corpus/<harness>/. A crash fails the script and leaves its reproducer in
-# build/fuzz/artifacts/ (printed with a hex dump).
+# build/fuzz/artifacts/ (printed with a hex dump). Reproducers worth keeping go to
+# test/fuzz/regressions/<harness>/ and are replayed first on every run.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 OUT="$ROOT/build/fuzz"
@@ -57,11 +58,13 @@ status=0
 for h in "${HARNESSES[@]}"; do
   corpus="$OUT/corpus/$h"
   mkdir -p "$corpus"
+  extra=()
+  [[ -d "$ROOT/test/fuzz/regressions/$h" ]] && extra=("$ROOT/test/fuzz/regressions/$h")  # past crashes
   log="$OUT/fuzz_$h.log"
   echo "fuzz: $h for ${SECONDS_EACH} s (log $log)"
   set +e
   "$OUT/fuzz_$h" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len=1024 \
-    -print_final_stats=1 -artifact_prefix="$OUT/artifacts/$h-" "$corpus" "$OUT/seeds/$h" >"$log" 2>&1
+    -print_final_stats=1 -artifact_prefix="$OUT/artifacts/$h-" "$corpus" "$OUT/seeds/$h" "${extra[@]}" >"$log" 2>&1
   rc=$?
   set -e
   grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb|^stat::new_units_added" "$log" | sed "s/^/fuzz: $h: /" || true

@@ -465,6 +465,7 @@ def gen_values() -> Tuple[Dict[str, Any], Dict[str, Any]]:
     bad("string empty payload (no length byte)", {"t": "str", "c": 8}, "", "BAD_LENGTH")
     bad("string length > capacity", {"t": "str", "c": 8}, "09616263646566676869", "BAD_VALUE")
     bad("string length byte 255, capacity 8", {"t": "str", "c": 8}, "ff" + "61" * 255, "BAD_VALUE")
+    bad("string length byte over capacity and payload short", {"t": "str", "c": 8}, "0961", "BAD_VALUE")
     bad("string shorter than its length byte", {"t": "str", "c": 8}, "036162", "BAD_LENGTH")
     bad("string longer than its length byte", {"t": "str", "c": 8}, "02616263", "BAD_LENGTH")
     bad("void with a byte", {"t": "void"}, "00", "BAD_LENGTH")

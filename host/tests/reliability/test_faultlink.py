@@ -89,6 +89,7 @@ def test_garbage_delay_and_stall(tmp_path: Any) -> None:
         assert r and time.monotonic() - t >= 0.15  # delayed
         time.sleep(0.5)
         assert p.fl.stats()["d2h"]["garbage_bursts"] >= 3
+        p.fl.set_faults("d2h", garbage_every=0.0, delay=0.0)
         read_all(p.hub, 0.2)
         p.fl.stall(600, "h2d")
         t = time.monotonic()

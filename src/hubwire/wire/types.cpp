@@ -167,9 +167,10 @@ static bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
 }
 
 ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
-  if (code == kStr) {
-    if (len < 1 || len != 1u + wire[0]) return kErrBadLength;
-    return wire[0] <= count ? kOk : kErrBadValue;
+  if (code == kStr) {  // the length byte is judged first, then the payload against it
+    if (len < 1) return kErrBadLength;
+    if (wire[0] > count) return kErrBadValue;
+    return len == 1u + wire[0] ? kOk : kErrBadLength;
   }
   if (len != wireSize()) return kErrBadLength;
   if (code != kStruct) return boolsValid(code, wire, len) ? kOk : kErrBadValue;
