@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-arm test-manifests test-python emulator simuno uno-firmware demo bench clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench clean
 
 all: emulator simuno
 
@@ -28,7 +28,7 @@ uno-firmware:
 	bash tools/arduino/build-sketch.sh examples/Rover arduino:avr:uno $(BUILD)/uno/Rover >/dev/null
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-examples test-arm test-manifests test-python
+	$(MAKE) test-cpp test-avr-core test-examples test-arm test-manifests test-fuzz test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -50,6 +50,10 @@ test-examples:
 test-arm:
 	bash tools/arm-check/check-arm.sh
 
+# libFuzzer + ASan/UBSan over the frame receiver and the device session: regressions, then ~60 s.
+test-fuzz:
+	bash test/fuzz/run.sh
+
 test-manifests:
 	$(PY) tools/check_manifests.py
 
@@ -58,6 +62,11 @@ test-python: emulator simuno uno-firmware
 
 demo: setup emulator simuno uno-firmware
 	bash tools/demo.sh
+
+# Every benchmark row (footprint, AVR cycles, wire bytes, hub throughput, connect time, round
+# trips, many devices) into bench/RESULTS.md.
+bench: setup emulator simuno uno-firmware
+	bash bench/run.sh
 
 clean:
 	rm -rf $(BUILD)

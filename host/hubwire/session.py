@@ -962,8 +962,11 @@ class Session:
                                     gaps.append(end)  # shorter answer than asked: fetch the rest
                                 progressed = True
                             elif now - p.sent_at >= self.retry_timeout:
-                                if p.tries >= self.tries:
-                                    raise Timeout(f"descriptor chunk at offset {off} not answered after {p.tries} tries")
+                                # Chunk requests are idempotent: on a lossy line keep asking for as
+                                # long as the download as a whole makes progress (connect_timeout).
+                                if now - self._progress_at >= self.connect_timeout:
+                                    raise Timeout(f"descriptor chunk at offset {off} not answered after "
+                                                  f"{p.tries} tries: no progress for {self.connect_timeout:g} s")
                                 self.stats["retries"] += 1
                                 self._transmit(p)
                         if progressed and self.progress is not None:

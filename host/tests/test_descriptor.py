@@ -142,3 +142,14 @@ def test_keyword_and_underscore_field_names_work() -> None:
     v = c.codec.decode(b"\x07\x01\x00")
     assert getattr(v, "from") == 7 and v._x == (True, False) and v["from"] == 7
     assert "from=7" in repr(v)
+
+
+def test_bools_are_not_numbers_for_numeric_channels() -> None:
+    """`left = True` must be refused like `beep(True)` is: a bool is not a speed."""
+    from hubwire.errors import InvalidValue
+    from hubwire.wire.values import codec_for
+
+    for t in ("f32", "f64", "u8", "i16"):
+        with pytest.raises(InvalidValue):
+            codec_for({"t": t}).check(True)
+    assert codec_for({"t": "bool"}).check(True) is True

@@ -314,6 +314,24 @@ TEST_F(Session, ChunksInAnyOrderAndSizeReassembleTheSameDescriptor) {
   EXPECT_EQ(shuffled, inOrder);
 }
 
+// Found by fuzzing: a hub announcing a tiny accepted payload must not make the chunk size wrap
+// (it overran the frame buffer). Payloads below a hello's 16 bytes are taken as 16.
+TEST_F(Session, TinyAnnouncedPayloadStillGivesBoundedChunks) {
+  drain(stream);
+  Bytes hello = hubHello(31);
+  storeU16(&hello[6], 2);
+  sendFrame(stream, '*', 0, 0, hello);
+  pump();
+  ASSERT_TRUE(device.linked());
+  Bytes req(3);
+  req[2] = 255;
+  RxFrame f = transact('J', 0, req);
+  ASSERT_EQ(f.type, 'J');
+  EXPECT_EQ(f.payload.size(), (size_t)kHelloSize);
+  speed = 0.5f;
+  EXPECT_EQ(transact('R', kSpeed).payload, le<float>(0.5f));  // state intact
+}
+
 TEST_F(Session, ChunksRespectTheWantedSizeAndOffsets) {
   link();
   Bytes req(3);

@@ -88,7 +88,9 @@ def _scalar_checker(t: str, where: str) -> Callable[[Any], Any]:
         is32 = t == "f32"
 
         def check_float(v: Any) -> float:
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
+            if isinstance(v, bool):  # True is an int in Python, but not a number for a speed
+                raise InvalidValue(f"{where}: expected a number for {t}, got {_describe(v)}", BAD_VALUE)
+            if not isinstance(v, (int, float)):
                 try:
                     v = float(v.__float__())  # numpy scalars, Decimal, Fraction
                 except (AttributeError, TypeError, ValueError, OverflowError):

@@ -39,10 +39,6 @@ def test_soak_exactly_once_no_corruption_no_reset(emulator_bin: str, tmp_path: A
     assert r["acked"] > 500 and r["events_delivered"] > 50 and r["reads"] > 50
 
 
-@pytest.mark.xfail(strict=True, reason="hub: descriptor download gives up after `tries` (5) per chunk and "
-                   "connect() raises at the first discovery failure; on a lossy link (2% byte drops) "
-                   "connect fails although the deadline has time left. Chunks are idempotent: the hub "
-                   "should keep asking until the connect deadline")
 def test_connect_and_discover_through_a_lossy_link(faultlink: Any) -> None:
     fl = faultlink(seed=5, both=Faults(drop=0.02, ber=1e-4))
     failures = []

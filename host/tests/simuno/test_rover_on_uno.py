@@ -177,9 +177,6 @@ def test_out_of_range_is_refused_by_hub_and_by_device(rover: Any) -> None:
     assert rover.left == 0.25 and rover.applied == applied
 
 
-@pytest.mark.xfail(reason="bug: NaN passes the min..max check on both sides (`v < min || v > max` is false "
-                          "for NaN, src/hubwire/session/device.cpp onControl and Channel.check in "
-                          "host/hubwire/descriptor.py), so left = nan is applied to the motors", strict=False)
 def test_nan_is_out_of_range(rover: Any) -> None:
     left = rover.channel("left")
     with pytest.raises(NakError) as nak:  # the device, past the hub's check

@@ -478,8 +478,9 @@ void Device::onHello(const Frame& f) {
   if (p[0] != kProtocolVersion || (p[1] & kHelloDevice)) return;  // the hub reports the mismatch
   uint32_t nonce = loadU32(p + 2);
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
+  // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap.
   uint16_t max = loadU16(p + 6);
-  peerMax_ = (uint8_t)(max > 255 ? 255 : max);
+  peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
   uint16_t beat = loadU16(p + 8);
   peerBeatMs_ = beat < 10 ? 10 : beat;
   if (!linked_) {
@@ -522,7 +523,7 @@ void Device::onChunk(const Frame& f) {
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
   if (offset > descLength_) return sendNak(f, kErrBadOffset);
-  uint16_t n = (uint16_t)(maxOut() - kChunkHeader);
+  uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
   if (descLength_ - offset < n) n = (uint16_t)(descLength_ - offset);
   uint8_t* out = tx_.payload();

@@ -170,7 +170,8 @@ void setup() {
   measureUpdate(18, 'H', 0, big, 32, false);       // 18: 'H' with a 32-byte payload (rx path slope)
   measureUpdate(19, 'R', 5, nullptr, 0, true);     // 19: R battery (ch 5, u16) -> r u16
   measureUpdate(28, 'R', 11, nullptr, 0, true);    // 28: R failsafes (ch 11, u16) -> r u16
-  // Descriptor chunks (28 bytes each): the JSON is generated from the start up to the window.
+  // Descriptor chunks (28 bytes each). Asked out of order (32-34), the device produces the JSON from
+  // the start up to the window; asked in order (35), it resumes at the channel the last chunk ended in.
   uint16_t total = hub.descriptorLength();
   uint8_t jr[3] = {0, 0, 28};
   measureUpdate(32, 'J', 0, jr, 3, true, 1);       // 32: J offset 0
@@ -182,6 +183,12 @@ void setup() {
   jr[0] = (uint8_t)last;
   jr[1] = (uint8_t)(last >> 8);
   measureUpdate(34, 'J', 0, jr, 3, true, 1);       // 34: J offset total-28 (last full chunk)
+  // 35: a whole download in order, as the hub asks for it: each chunk resumes where the last ended.
+  for (uint16_t off = 0; off < total; off = (uint16_t)(off + 28)) {
+    jr[0] = (uint8_t)off;
+    jr[1] = (uint8_t)(off >> 8);
+    measureUpdate(35, 'J', 0, jr, 3, true, 1);
+  }
   GPIOR0 = 0xFE;  // data, not a mark: the descriptor length, low byte then high byte
   GPIOR0 = (uint8_t)total;
   GPIOR0 = (uint8_t)(total >> 8);
