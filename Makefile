@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long clean
 
 all: emulator simuno
 
@@ -67,6 +67,15 @@ demo: setup emulator simuno uno-firmware
 # trips, many devices) into bench/RESULTS.md.
 bench: setup emulator simuno uno-firmware
 	bash bench/run.sh
+
+# Long modes of the reliability checks (docs/RELIABILITY.md): 1,000,000 frames through the faulty
+# link, and each fuzzer for half an hour (FUZZ_SECONDS to change).
+soak: setup emulator
+	HUBWIRE_SOAK_FRAMES=$${HUBWIRE_SOAK_FRAMES:-1000000} $(PY) -m pytest host/tests/reliability/test_soak.py -s -q
+
+FUZZ_SECONDS ?= 1800
+fuzz-long: setup
+	bash test/fuzz/run.sh --long $(FUZZ_SECONDS)
 
 clean:
 	rm -rf $(BUILD)
