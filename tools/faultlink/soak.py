@@ -72,9 +72,27 @@ def _retry(fn: Callable[[], Any], what: str, deadline: float = 30.0) -> Any:
             time.sleep(0.05)
 
 
+#: channels streamed at 100 Hz during the soak, each sample checked against what it can be
+STREAMS = ("left", "right", "battery", "range")
+
+
+def plausible(name: str, value: Any, written: set) -> bool:
+    """What a sample of Rover's channel can be: left was written by the soak, right never was,
+    battery and range follow the sketch's formulas (examples/Rover/Rover.ino readSensors())."""
+    if name == "left":
+        return value in written
+    if name == "right":
+        return value == 0.0
+    if name == "battery":
+        return 7200 <= value <= 7400
+    if name == "range":
+        return len(value) == 4 and all(100 + 50 * i <= x < 120 + 50 * i for i, x in enumerate(value))
+    return True
+
+
 def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, seed: int = 1,
              faults: Faults = SOAK_FAULTS, workdir: str = "/tmp", binary: Optional[str] = None,
-             log: Callable[[str], None] = print) -> Dict[str, Any]:
+             streams: bool = True, log: Callable[[str], None] = print) -> Dict[str, Any]:
     """Run the soak until ``seconds`` pass or ``frames`` went through the proxy; return the counts."""
     import hubwire
 
@@ -113,6 +131,28 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
         st_batches: List[int] = []
         last_acked: Optional[float] = None
         last_timed_out: List[float] = []
+
+        # Streams (opened on the clean link): many more frames, every sample checked.
+        samples = {n: 0 for n in STREAMS}
+        bad_samples: List[Any] = []
+        stop_streams = threading.Event()
+
+        def consume(st: Any, name: str) -> None:
+            while not stop_streams.is_set():
+                try:
+                    v = next(st)
+                except hubwire.Timeout:
+                    continue
+                except (hubwire.LinkLost, StopIteration):
+                    return
+                samples[name] += 1
+                if not plausible(name, v, written):
+                    bad_samples.append((name, v))
+
+        opened = [dev.stream(n, interval_ms=10, timeout=1.0) for n in STREAMS] if streams else []
+        consumers = [threading.Thread(target=consume, args=(st, st.channel.name), daemon=True) for st in opened]
+        for t in consumers:
+            t.start()
 
         fl.set_faults(**{k: getattr(faults, k) for k in ("ber", "drop", "dup", "truncate", "garbage_every",
                                                         "garbage_len", "delay", "stall_every", "stall_ms")})
@@ -172,6 +212,14 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
                     link_lost_errors += 1
         elapsed = time.monotonic() - t0
         during = fl.stats()
+        stop_streams.set()
+        for t in consumers:
+            t.join(5)
+        for st in opened:
+            try:
+                st.close()  # unsubscribe; on a faulty link this may time out, dev.close() ends it anyway
+            except hubwire.HubwireError:
+                pass
         # accounting on a clean link
         fl.set_faults(ber=0.0, drop=0.0, dup=0.0, truncate=0.0, garbage_every=0.0, delay=0.0, stall_every=0.0)
         lo, hi = st_returned, st_returned + st_timeout_max
@@ -201,6 +249,7 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
             "events_delivered": len(evs),
             "event_seq_gaps_or_dups": sum(1 for d in seq_steps if d != 1),
             "event_order_ok": st_timeouts > 0 or [v for _, v in evs] == expected_values,
+            "samples": dict(samples), "bad_samples": len(bad_samples), "bad_sample_values": bad_samples[:10],
             "failsafes": failsafes, "link_lost_callbacks": len(lost),
             "reboots": s.stats["reboots"], "state": dev.state,
             "final_left": final_left, "last_acked": last_acked, "last_timed_out": last_timed_out,
@@ -227,6 +276,8 @@ def check(r: Dict[str, Any]) -> List[str]:
     bad = []
     if r["bad_reads"]:
         bad.append(f"{r['bad_reads']} reads returned values never written: {r['bad_values']}")
+    if r.get("bad_samples"):
+        bad.append(f"{r['bad_samples']} streamed samples were impossible values: {r['bad_sample_values']}")
     if r["naks"]:
         bad.append(f"{r['naks']} writes were NAKed (a corrupted frame accepted as valid?)")
     if not r["acked"] <= r["applied"] <= r["acked"] + r["timeouts"]:
