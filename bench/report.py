@@ -52,6 +52,12 @@ def footprint():
     return {"rows": rows, "details": "### Row 1: footprint\n\n" + text.split("\n", 1)[1].strip() + "\n"}
 
 
+def misses() -> str:
+    """The hand-written analysis of the rows that miss their target (bench/MISSES.md)."""
+    path = os.path.join(ROOT, "bench/MISSES.md")
+    return ("\n" + open(path).read()) if os.path.exists(path) else ""
+
+
 def main() -> None:
     took = float(sys.argv[1]) if len(sys.argv) > 1 else 0.0
     parts = {}
@@ -100,6 +106,7 @@ ratios are taken within one run. No test asserts on any timing here.
 
 {md_table(["row", "target", "measured", "verdict", "command", "notes / for scale"], table)}
 
+""" + misses() + """
 ## Details
 
 """ + "\n".join(parts[n]["details"] for n in ORDER if n in parts)
