@@ -198,6 +198,7 @@ TypeUnderTest typeFrom(const json& t) {
   out.type.code = codeOf(t["t"]);
   out.type.count = t.value("c", 0);
   if (out.type.code == kStruct) {
+    out.type.structs = structCodec;
     for (auto& f : t["f"]) {
       if (!out.layout.empty()) out.layout += ",";
       out.layout += f["n"].get<std::string>() + ":" + f["t"].get<std::string>();

@@ -102,9 +102,9 @@ Device::Builder& Device::declare(Text name, void* data, ValueType type, uint16_t
 
 Device::Builder& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(),
                                      Thunk thunk) {
-  Builder& b = declare(name, nullptr, ValueType{arg, 0, Text()}, scalarSize(arg), access);
+  Builder& b = declare(name, nullptr, ValueType{arg, 0, Text(), nullptr}, scalarSize(arg), access);
   if (!skip_) {
-    info_.ret = ValueType{ret, 0, Text()};
+    info_.ret = ValueType{ret, 0, Text(), nullptr};
     info_.fn = fn;
     info_.thunk = thunk;
   }
@@ -167,7 +167,7 @@ void Device::checkChannel() {
     LayoutReader r(t.layout);
     LayoutField f;
     uint8_t n = 0;
-    while (r.next(f)) ++n;
+    while (t.structs(kStructNext, t.layout, &r, &f, 0)) ++n;
     if (!r.ok || n == 0 || t.memSize() != info_.memSize) e = kSetupBadLayout;
   }
   if (e == kSetupOk) {
@@ -222,7 +222,7 @@ static void putType(JsonWindow& j, Text typeKey, Text countKey, const ValueType&
   LayoutReader r(t.layout);
   LayoutField f;
   bool first = true;
-  while (r.next(f)) {
+  while (t.structs(kStructNext, t.layout, &r, &f, 0)) {
     if (!first) j.put(',');
     first = false;
     j.put('{');

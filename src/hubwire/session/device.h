@@ -163,22 +163,22 @@ class Device : private DeviceState {
   // A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
   template <typename T>
   Builder& expose(Text name, T& var) {
-    return declare(name, &var, ValueType{TypeOf<T>::code, 0, Text()}, sizeof(T), kReadable);
+    return declare(name, &var, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kReadable);
   }
   template <typename T, size_t N>
   Builder& expose(Text name, T (&arr)[N]) {
     static_assert(N <= 255, "arrays hold at most 255 elements");
-    return declare(name, arr, ValueType{TypeOf<T>::code, (uint8_t)N, Text()}, sizeof(arr), kReadable);
+    return declare(name, arr, ValueType{TypeOf<T>::code, (uint8_t)N, Text(), nullptr}, sizeof(arr), kReadable);
   }
   template <size_t N>
   Builder& expose(Text name, char (&str)[N]) {
     static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
-    return declare(name, str, ValueType{kStr, (uint8_t)(N - 1), Text()}, N, kReadable);
+    return declare(name, str, ValueType{kStr, (uint8_t)(N - 1), Text(), nullptr}, N, kReadable);
   }
   // A struct with named fields, laid out by text such as F("ax:f32,ay:f32,gyro:i16[3]").
   template <typename T>
   Builder& expose(Text name, T& var, Text layout) {
-    return declare(name, &var, ValueType{kStruct, 0, layout}, sizeof(T), kReadable);
+    return declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
   }
 
   // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
@@ -211,7 +211,7 @@ class Device : private DeviceState {
   // An event the sketch emits; the hub is told exactly once.
   template <typename T>
   Builder& event(Text name, Event<T>& ev) {
-    Builder& b = declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text()}, sizeof(T), kEventAccess);
+    Builder& b = declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kEventAccess);
     if (!skip_) info_.eventId = &ev.id;
     return b;
   }
@@ -229,7 +229,7 @@ class Device : private DeviceState {
   // Queues an event for the hub; false when the queue is full or the event was not declared.
   template <typename T>
   bool emit(const Event<T>& ev, const typename Same<T>::type& value) {
-    return emitRaw(ev.id, &value, ValueType{TypeOf<T>::code, 0, Text()});
+    return emitRaw(ev.id, &value, ValueType{TypeOf<T>::code, 0, Text(), nullptr});
   }
 
   void onLinkUp(void (*fn)()) { onLinkUp_ = fn; }

@@ -105,21 +105,19 @@ bool LayoutReader::next(LayoutField& f) {
   return true;
 }
 
-uint16_t ValueType::wireSize() const {
-  if (code == kStr) return (uint16_t)(1 + count);
-  if (code == kStruct) {
-    uint16_t n = 0;
-    LayoutReader r(layout);
-    LayoutField f;
-    while (r.next(f)) n = (uint16_t)(n + scalarSize(f.code) * (f.count ? f.count : 1));
-    return n;
-  }
-  return (uint16_t)(scalarSize(code) * (count ? count : 1));
+namespace {
+
+uint16_t fieldBytes(const LayoutField& f) { return (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1)); }
+
+uint16_t structWireSize(Text layout) {
+  uint16_t n = 0;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) n = (uint16_t)(n + fieldBytes(f));
+  return n;
 }
 
-uint16_t ValueType::memSize() const {
-  if (code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
-  if (code != kStruct) return wireSize();
+uint16_t structMemSize(Text layout) {
   uint16_t n = 0;
   uint8_t maxAlign = 1;
   LayoutReader r(layout);
@@ -127,9 +125,89 @@ uint16_t ValueType::memSize() const {
   while (r.next(f)) {
     uint8_t a = alignOf(f.code);
     if (a > maxAlign) maxAlign = a;
-    n = (uint16_t)(alignUp(n, a) + scalarSize(f.code) * (f.count ? f.count : 1));
+    n = (uint16_t)(alignUp(n, a) + fieldBytes(f));
   }
   return alignUp(n, maxAlign);
+}
+
+// Copies field by field between the packed wire form and the aligned memory form.
+uint16_t structCopy(Text layout, uint8_t* mem, uint8_t* wire, bool toWire) {
+  uint16_t memOff = 0, wireOff = 0;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) {
+    uint16_t n = fieldBytes(f);
+    memOff = alignUp(memOff, alignOf(f.code));
+    if (toWire) {
+      memcpy(wire + wireOff, mem + memOff, n);
+    } else {
+      memcpy(mem + memOff, wire + wireOff, n);
+    }
+    memOff = (uint16_t)(memOff + n);
+    wireOff = (uint16_t)(wireOff + n);
+  }
+  return wireOff;
+}
+
+uint16_t structToWire(Text layout, const void* mem, uint8_t* wire) {
+  return structCopy(layout, (uint8_t*)mem, wire, true);
+}
+
+void structFromWire(Text layout, const uint8_t* wire, void* mem) {
+  structCopy(layout, (uint8_t*)mem, (uint8_t*)wire, false);
+}
+
+bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
+  if (t != kBool) return true;
+  for (uint16_t i = 0; i < n; ++i)
+    if (p[i] > 1) return false;
+  return true;
+}
+
+ErrorCode structCheck(Text layout, const uint8_t* wire, uint16_t len) {
+  if (len != structWireSize(layout)) return kErrBadLength;
+  uint16_t off = 0;
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f)) {
+    uint16_t n = fieldBytes(f);
+    if (!boolsValid(f.code, wire + off, n)) return kErrBadValue;
+    off = (uint16_t)(off + n);
+  }
+  return kOk;
+}
+
+}  // namespace
+
+uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len) {
+  switch (op) {
+    case kStructWireSize:
+      return structWireSize(layout);
+    case kStructMemSize:
+      return structMemSize(layout);
+    case kStructToWire:
+      return structToWire(layout, in, (uint8_t*)out);
+    case kStructCheck:
+      return structCheck(layout, (const uint8_t*)in, len);
+    case kStructFromWire:
+      structFromWire(layout, (const uint8_t*)in, out);
+      return 0;
+    case kStructNext:
+      return ((LayoutReader*)in)->next(*(LayoutField*)out);
+  }
+  return 0;
+}
+
+uint16_t ValueType::wireSize() const {
+  if (code == kStr) return (uint16_t)(1 + count);
+  if (code == kStruct) return structs(kStructWireSize, layout, nullptr, nullptr, 0);
+  return (uint16_t)(scalarSize(code) * (count ? count : 1));
+}
+
+uint16_t ValueType::memSize() const {
+  if (code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
+  if (code == kStruct) return structs(kStructMemSize, layout, nullptr, nullptr, 0);
+  return wireSize();
 }
 
 uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
@@ -141,29 +219,10 @@ uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
     memcpy(wire + 1, m, n);
     return (uint16_t)(n + 1);
   }
-  if (code != kStruct) {
-    uint16_t n = wireSize();
-    memcpy(wire, m, n);
-    return n;
-  }
-  uint16_t memOff = 0, wireOff = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
-    memOff = alignUp(memOff, alignOf(f.code));
-    memcpy(wire + wireOff, m + memOff, n);
-    memOff = (uint16_t)(memOff + n);
-    wireOff = (uint16_t)(wireOff + n);
-  }
-  return wireOff;
-}
-
-static bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
-  if (t != kBool) return true;
-  for (uint16_t i = 0; i < n; ++i)
-    if (p[i] > 1) return false;
-  return true;
+  if (code == kStruct) return structs(kStructToWire, layout, mem, wire, 0);
+  uint16_t n = wireSize();
+  memcpy(wire, m, n);
+  return n;
 }
 
 ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
@@ -172,17 +231,9 @@ ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
     if (wire[0] > count) return kErrBadValue;
     return len == 1u + wire[0] ? kOk : kErrBadLength;
   }
+  if (code == kStruct) return (ErrorCode)structs(kStructCheck, layout, wire, nullptr, len);
   if (len != wireSize()) return kErrBadLength;
-  if (code != kStruct) return boolsValid(code, wire, len) ? kOk : kErrBadValue;
-  uint16_t off = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
-    if (!boolsValid(f.code, wire + off, n)) return kErrBadValue;
-    off = (uint16_t)(off + n);
-  }
-  return kOk;
+  return boolsValid(code, wire, len) ? kOk : kErrBadValue;
 }
 
 void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
@@ -190,21 +241,10 @@ void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
   if (code == kStr) {
     memcpy(m, wire + 1, wire[0]);
     m[wire[0]] = 0;
-    return;
-  }
-  if (code != kStruct) {
+  } else if (code == kStruct) {
+    structs(kStructFromWire, layout, wire, mem, len);
+  } else {
     memcpy(m, wire, len);
-    return;
-  }
-  uint16_t memOff = 0, wireOff = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
-    memOff = alignUp(memOff, alignOf(f.code));
-    memcpy(m + memOff, wire + wireOff, n);
-    memOff = (uint16_t)(memOff + n);
-    wireOff = (uint16_t)(wireOff + n);
   }
 }
 

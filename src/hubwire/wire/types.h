@@ -71,29 +71,6 @@ struct TypeOf<double> {
   static const TypeCode code = (sizeof(double) == 8) ? kF64 : kF32;
 };
 
-// A channel's value type as stored: scalar, fixed array (count > 0), string or struct.
-struct ValueType {
-  TypeCode code;
-  uint8_t count;  // array elements (0 = a single scalar), or string capacity
-  Text layout;    // struct fields
-
-  // Bytes of the value on the wire; for a string, its largest encoding (1 + capacity).
-  uint16_t wireSize() const;
-  // Bytes of the value in memory.
-  uint16_t memSize() const;
-  // Copies a value from memory to its wire form; returns the wire length.
-  uint16_t toWire(const void* mem, uint8_t* wire) const;
-  // Checks a wire value (length, bools, string length). kOk or an error code.
-  ErrorCode check(const uint8_t* wire, uint16_t len) const;
-  // Copies a checked wire value into memory.
-  void fromWire(const uint8_t* wire, uint16_t len, void* mem) const;
-};
-
-// Reads scalar i of a wire value as a double, for range checks (scalars and arrays).
-double scalarAsDouble(TypeCode t, const uint8_t* p);
-// Stores a double into one scalar in memory (used for failsafe values).
-void storeScalar(TypeCode t, double v, void* mem);
-
 // Walks a struct layout text "name:type[count],...". Returns false at the end or on a syntax error
 // (then ok is false).
 struct LayoutField {
@@ -111,6 +88,39 @@ class LayoutReader {
   Text text_;
   uint16_t pos_;
 };
+
+// Struct values are handled only through one function, which the struct form of Device::expose()
+// refers to: a sketch that declares no struct links none of it (about 1 KB of flash on AVR). One
+// function rather than a table of them, because AVR keeps such tables in RAM.
+enum StructOp : uint8_t { kStructWireSize, kStructMemSize, kStructToWire, kStructCheck, kStructFromWire, kStructNext };
+// kStructToWire: in = memory, out = wire. kStructCheck: in = wire, len. kStructFromWire: in = wire,
+// out = memory. kStructNext: in = LayoutReader*, out = LayoutField*, returns 1 while fields remain.
+typedef uint16_t (*StructCodec)(StructOp op, Text layout, const void* in, void* out, uint16_t len);
+uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len);
+
+// A channel's value type as stored: scalar, fixed array (count > 0), string or struct.
+struct ValueType {
+  TypeCode code;
+  uint8_t count;                // array elements (0 = a single scalar), or string capacity
+  Text layout;                  // struct fields
+  StructCodec structs;          // kStruct only: structCodec
+
+  // Bytes of the value on the wire; for a string, its largest encoding (1 + capacity).
+  uint16_t wireSize() const;
+  // Bytes of the value in memory.
+  uint16_t memSize() const;
+  // Copies a value from memory to its wire form; returns the wire length.
+  uint16_t toWire(const void* mem, uint8_t* wire) const;
+  // Checks a wire value (length, bools, string length). kOk or an error code.
+  ErrorCode check(const uint8_t* wire, uint16_t len) const;
+  // Copies a checked wire value into memory.
+  void fromWire(const uint8_t* wire, uint16_t len, void* mem) const;
+};
+
+// Reads scalar i of a wire value as a double, for range checks (scalars and arrays).
+double scalarAsDouble(TypeCode t, const uint8_t* p);
+// Stores a double into one scalar in memory (used for failsafe values).
+void storeScalar(TypeCode t, double v, void* mem);
 
 }  // namespace hubwire
 
