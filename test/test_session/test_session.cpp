@@ -10,6 +10,7 @@
 
 #include "fakes.h"
 #include "hubwire/session/device.h"
+#include "hubwire/session/json_window.h"
 #include "hubwire/wire/bytes.h"
 
 using namespace hubwire;
@@ -697,4 +698,25 @@ TEST(Declarations, ErrorsAreReportedWithTheChannel) {
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// Descriptor numbers (min, max, fs) are printed without floating-point arithmetic; they must read
+// back as the same f32 the sketch declared.
+TEST(JsonNumbers, ReadBackAsTheSameFloat) {
+  const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.25f, 0.7f, 0.1f, 3.3f, 5000.0f, 9.81f, 123456.789f,
+                          -32768.0f, 65535.0f, 4294967295.0f, 1e20f, -3.4028235e38f, 1e-3f, 2.5e-5f, 0.0001f};
+  for (float v : values) {
+    char buf[64] = {0};
+    JsonWindow j(0, sizeof(buf) - 1, (uint8_t*)buf);
+    j.number(v);
+    double back = nlohmann::json::parse(buf).get<double>();
+    EXPECT_NEAR(back, v, std::fabs(v) * 1e-6 + 1e-6) << buf;
+    if (v == (float)(int32_t)v && std::fabs(v) < 1e9f && !std::signbit(v)) {
+      EXPECT_EQ(std::string(buf), std::to_string((int32_t)v)) << buf;
+    }
+  }
+  char buf[16] = {0};
+  JsonWindow j(0, sizeof(buf) - 1, (uint8_t*)buf);
+  j.number(0.7f);  // 0.699999988: rounds to 6 decimals, not truncated to 0.699999
+  EXPECT_STREQ(buf, "0.7");
 }

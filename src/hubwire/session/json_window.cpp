@@ -1,5 +1,7 @@
 #include "json_window.h"
 
+#include <string.h>
+
 #include "protocol.h"
 
 namespace hubwire {
@@ -51,41 +53,74 @@ void JsonWindow::uinteger(uint32_t v) {
   while (n) put(digits[--n]);
 }
 
-// Up to 6 decimals, trailing zeros dropped: exact for integers and for the short decimal constants
-// sketches use as ranges (0.5, -1, 3.3). Magnitudes of 4e9 and more are written in exponent form.
-void JsonWindow::number(double v) {
-  if (v != v) v = 0;  // NaN has no JSON form
-  if (v < 0) {
-    put('-');
-    v = -v;
+// Integers exactly (any size), other values with six rounded decimals, trailing zeros dropped. Only
+// integer arithmetic on the float's bits: the soft-float add, multiply and divide routines this
+// would otherwise pull in cost about 1 KB of flash on AVR.
+void JsonWindow::number(float v) {
+  uint32_t bits;
+  memcpy(&bits, &v, sizeof(bits));
+  uint8_t exp = (uint8_t)(bits >> 23);
+  uint32_t mant = bits & 0x7FFFFFUL;
+  if (exp == 0xFF || (bits << 1) == 0) {  // inf and NaN have no JSON form; +0 and -0 print as 0
+    put('0');
+    return;
   }
-  int exp10 = 0;
-  while (v >= 4e9) {
-    v /= 10;
-    ++exp10;
+  if (bits & 0x80000000UL) put('-');
+  if (exp == 0) {
+    exp = 1;  // subnormal: no implicit leading 1
+  } else {
+    mant |= 0x800000UL;
   }
-  uint32_t ip = (uint32_t)v;
-  uint32_t frac = (uint32_t)((v - ip) * 1e6 + 0.5);
-  if (frac >= 1000000UL) {
-    ++ip;
-    frac -= 1000000UL;
+  int16_t e = (int16_t)(exp - 150);  // v = mant * 2^e
+  if (e >= 0) {
+    char d[40];  // decimal digits, least significant first: mant, then doubled e times
+    uint8_t n = 0;
+    do {
+      d[n++] = (char)(mant % 10);
+      mant /= 10;
+    } while (mant);
+    for (; e > 0; --e) {
+      uint8_t carry = 0;
+      for (uint8_t i = 0; i < n; ++i) {
+        uint8_t x = (uint8_t)(d[i] * 2 + carry);
+        d[i] = (char)(x % 10);
+        carry = x / 10;
+      }
+      if (carry) d[n++] = (char)carry;
+    }
+    while (n) put((char)('0' + d[--n]));
+    return;
+  }
+  uint8_t shift = (uint8_t)(-e);  // v = mant / 2^shift
+  uint32_t ip = 0, frac;
+  if (shift <= 28) {
+    ip = shift < 24 ? mant >> shift : 0;
+    frac = mant & ((1UL << shift) - 1);
+  } else {
+    frac = mant >> (shift - 28);  // below 2^-4: keep 28 fraction bits, plenty for 6 decimals
+    shift = 28;
+  }
+  char d[7];
+  for (uint8_t i = 0; i < 7; ++i) {  // frac * 10 < 2^32 because frac < 2^28
+    frac *= 10;
+    d[i] = (char)(frac >> shift);
+    frac &= (1UL << shift) - 1;
+  }
+  if (d[6] >= 5) {  // round to six decimals, carrying into the integer part if need be
+    int8_t i = 5;
+    while (i >= 0 && d[i] == 9) d[i--] = 0;
+    if (i >= 0) {
+      ++d[i];
+    } else {
+      ++ip;
+    }
   }
   uinteger(ip);
-  if (frac) {
-    put('.');
-    char d[6];
-    for (int i = 5; i >= 0; --i) {
-      d[i] = (char)('0' + frac % 10);
-      frac /= 10;
-    }
-    int last = 5;
-    while (d[last] == '0') --last;
-    for (int i = 0; i <= last; ++i) put(d[i]);
-  }
-  if (exp10) {
-    put('e');
-    uinteger((uint32_t)exp10);
-  }
+  int8_t last = 5;
+  while (last >= 0 && d[last] == 0) --last;
+  if (last < 0) return;
+  put('.');
+  for (int8_t i = 0; i <= last; ++i) put((char)('0' + d[i]));
 }
 
 }  // namespace hubwire

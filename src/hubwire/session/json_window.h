@@ -19,7 +19,7 @@ class JsonWindow {
   void raw(const char* s);  // RAM literal, no escaping
   void text(Text t);        // quoted and escaped
   void key(Text k);         // ,"k": or "k": as needed
-  void number(double v);
+  void number(float v);
   void uinteger(uint32_t v);
 
   uint16_t length() const { return pos_; }
