@@ -48,7 +48,7 @@ def footprint():
         rows.append(row(f"1. Uno footprint of {name} over the Serial-echo baseline",
                         f"<= +{int(tf) / 1024:.1f} KB flash / +{ts} B SRAM, no heap",
                         f"+{int(df):,} B flash / +{ds} B SRAM, malloc linked: {heap}", met, "bash bench/footprint.sh",
-                        "see change requests" if not met else ""))
+                        "see Misses below" if not met else ""))
     return {"rows": rows, "details": "### Row 1: footprint\n\n" + text.split("\n", 1)[1].strip() + "\n"}
 
 
