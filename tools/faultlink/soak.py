@@ -78,15 +78,17 @@ STREAMS = ("left", "right", "battery", "range")
 
 def plausible(name: str, value: Any, written: set) -> bool:
     """What a sample of Rover's channel can be: left was written by the soak, right never was,
-    battery and range follow the sketch's formulas (examples/Rover/Rover.ino readSensors())."""
+    battery and range hold their initial values or follow the sketch's formulas (examples/Rover/
+    Rover.ino, readSensors())."""
     if name == "left":
         return value in written
     if name == "right":
         return value == 0.0
     if name == "battery":
         return 7200 <= value <= 7400
-    if name == "range":
-        return len(value) == 4 and all(100 + 50 * i <= x < 120 + 50 * i for i, x in enumerate(value))
+    if name == "range":  # all zero until the sketch's first sensor read, 20 ms after boot
+        return len(value) == 4 and (tuple(value) == (0, 0, 0, 0)
+                                    or all(100 + 50 * i <= x < 120 + 50 * i for i, x in enumerate(value)))
     return True
 
 
