@@ -34,6 +34,7 @@ or as a command (``PYTHONPATH=tools python -m faultlink --help``).
 from __future__ import annotations
 
 import errno
+import subprocess
 import math
 import os
 import random
@@ -382,12 +383,18 @@ class FaultLink:
                 except OSError:
                     pass
                 setattr(self, name, -1)
-        if self._dev is not None:
-            try:
-                os.close(self._dev)
-            except OSError:
-                pass
-            self._dev = None
+        self._close_device()
+
+    def _close_device(self) -> bool:
+        """Close the emulator side of the proxy; True if it was open."""
+        if self._dev is None:
+            return False
+        try:
+            os.close(self._dev)
+        except OSError:
+            pass
+        self._dev = None
+        return True
 
     def __enter__(self) -> "FaultLink":
         return self.start()
@@ -451,12 +458,7 @@ class FaultLink:
     # the forwarding loop ------------------------------------------------------------------
 
     def _device_lost(self, now: float) -> None:
-        if self._dev is not None:
-            try:
-                os.close(self._dev)
-            except OSError:
-                pass
-            self._dev = None
+        if self._close_device():
             self.device_losses += 1
         self._dirs["h2d"].discard()
         self._dev_retry_at = now + self.reopen_interval
@@ -525,3 +527,15 @@ class FaultLink:
                         except OSError:
                             self._dev_retry_at = now + self.reopen_interval
                 d2h.write_to(self._master, now)
+
+
+def stop_process(p: "subprocess.Popen[Any]", timeout: float = 5.0) -> None:
+    """SIGTERM a child (emulator, simulator) and reap it; SIGKILL if it does not end in time."""
+    if p.poll() is not None:
+        return
+    p.terminate()
+    try:
+        p.wait(timeout)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.wait(timeout)

@@ -30,7 +30,7 @@ import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-from . import FaultLink, Faults
+from . import FaultLink, Faults, stop_process
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
@@ -265,12 +265,7 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
         if dev is not None:
             dev.close()
         fl.stop()
-        emu.terminate()
-        try:
-            emu.wait(5)
-        except subprocess.TimeoutExpired:
-            emu.kill()
-            emu.wait(5)
+        stop_process(emu)
 
 
 def check(r: Dict[str, Any]) -> List[str]:

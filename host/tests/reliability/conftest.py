@@ -18,7 +18,7 @@ TOOLS = os.path.join(REPO, "tools")
 if TOOLS not in sys.path:
     sys.path.insert(0, TOOLS)
 
-from faultlink import FaultLink, Faults  # noqa: E402
+from faultlink import FaultLink, Faults, stop_process  # noqa: E402
 from hubwire.wire import messages as m  # noqa: E402
 from hubwire.wire.frame import FrameDecoder, encode_frame  # noqa: E402
 
@@ -51,12 +51,7 @@ class Emu:
         if self.proc is None:
             return
         p, self.proc = self.proc, None
-        p.terminate()
-        try:
-            p.wait(5)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait(5)
+        stop_process(p)
         if os.path.lexists(self.link):
             os.unlink(self.link)
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import selectors
 import signal
+import sys
 import subprocess
 import time
 from typing import Any, Callable, Iterator, Optional
@@ -16,6 +17,11 @@ from typing import Any, Callable, Iterator, Optional
 import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+TOOLS = os.path.join(REPO, "tools")
+if TOOLS not in sys.path:
+    sys.path.insert(0, TOOLS)
+
+from faultlink import stop_process  # noqa: E402
 BUILD_HINT = "build them with `make simuno uno-firmware`"
 
 #: Like an Uno's bootloader after the DTR reset: the sketch starts ~1 s after the port is opened
@@ -98,13 +104,7 @@ class Simuno:
         if self.proc is None:
             return 0
         p, self.proc = self.proc, None
-        if p.poll() is None:
-            p.terminate()
-            try:
-                p.wait(5)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait(5)
+        stop_process(p)
         if p.stdout is not None:
             p.stdout.close()
         return p.returncode
