@@ -29,6 +29,7 @@ struct Pose {
 } pose;
 uint32_t hidden;
 bool lamp;
+int16_t temps[2];
 Event<uint16_t> alarm;
 int ledCalls, pingCalls, lostCalls, upCalls, changes;
 uint8_t lastLed;
@@ -59,10 +60,16 @@ void declarations() {
   dut->action("reset", reset);                                                                                // 8
   dut->event("alarm", alarm);                                                                                 // 9
   dut->expose("lamp", lamp).writable().failsafe(1);                                                           // 10
+  dut->expose("temps", temps).writable().range(-40, 125).failsafe(-40);                                        // 11
 }
 
 const uint8_t kSpeed = 1, kCounts = 2, kLabel = 3, kPose = 4, kLed = 5, kEven = 6, kPing = 7, kReset = 8, kAlarm = 9,
-              kLamp = 10;
+              kLamp = 10, kTemps = 11;
+
+Bytes operator+(Bytes a, const Bytes& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
 
 uint32_t fnv(const std::string& s) {
   uint32_t h = kFnvOffset;
@@ -93,6 +100,7 @@ class Session : public ::testing::Test {
     dut = &device;
     speed = 0;
     lamp = false;
+    temps[0] = temps[1] = 0;
     memset(counts, 0, sizeof(counts));
     strcpy(label, "hi");
     ledCalls = pingCalls = lostCalls = upCalls = changes = 0;
@@ -261,7 +269,7 @@ TEST_F(Session, DescriptorIsValidJsonMatchingHashAndDeclarations) {
   EXPECT_EQ(j["p"], 1);
   EXPECT_EQ(j["n"], "tester");
   EXPECT_EQ(j["fw"], "2.1");
-  ASSERT_EQ(j["ch"].size(), 10u);
+  ASSERT_EQ(j["ch"].size(), 11u);
   auto s = j["ch"][0];
   EXPECT_EQ(s["id"], 1);
   EXPECT_EQ(s["n"], "speed");
@@ -288,6 +296,28 @@ TEST_F(Session, DescriptorIsValidJsonMatchingHashAndDeclarations) {
   EXPECT_FALSE(j["ch"][7].contains("rt"));
   EXPECT_EQ(j["ch"][8]["a"], "e");
   EXPECT_EQ(j["ch"][8]["t"], "u16");
+  // Integer ranges and failsafes print as integers of the channel's own type.
+  auto t = j["ch"][10];
+  EXPECT_EQ(t["t"], "i16");
+  EXPECT_EQ(t["min"], -40);
+  EXPECT_EQ(t["max"], 125);
+  EXPECT_EQ(t["fs"], -40);
+  EXPECT_EQ(d.find("\"min\":-40,\"max\":125,\"fs\":-40"), d.find("\"min\":-40"));
+}
+
+// Ranges compare in the channel's own type: every element of an array is checked, the edges
+// are inside, and a refused write changes nothing.
+TEST_F(Session, IntegerRangesCheckEveryElementAtTheEdges) {
+  link();
+  temps[0] = temps[1] = 7;
+  expectNak(transact('C', kTemps, le<int16_t>(0) + le<int16_t>(126)), kErrOutOfRange);
+  expectNak(transact('C', kTemps, le<int16_t>(-41) + le<int16_t>(0)), kErrOutOfRange);
+  expectNak(transact('C', kTemps, le<int16_t>(-32768) + le<int16_t>(0)), kErrOutOfRange);
+  EXPECT_EQ(temps[0], 7);
+  EXPECT_EQ(temps[1], 7);
+  EXPECT_EQ(transact('C', kTemps, le<int16_t>(-40) + le<int16_t>(125)).type, kMsgAck);
+  EXPECT_EQ(temps[0], -40);
+  EXPECT_EQ(temps[1], 125);
 }
 
 // Chunks are served from a resume point when asked in order; any order must give the same bytes.
@@ -499,6 +529,8 @@ TEST_F(Session, SilenceLosesTheLinkAppliesFailsafesAndCallsTheHook) {
   EXPECT_EQ(lostCalls, 1);
   EXPECT_EQ(speed, 0.0f);
   EXPECT_TRUE(lamp);
+  EXPECT_EQ(temps[0], -40);  // every element of an array
+  EXPECT_EQ(temps[1], -40);
   // The hub's next heartbeat gets a hello back, inviting it to handshake again.
   sendFrame(stream, 'H', 0, 0, Bytes(10));
   auto f = pump();

@@ -38,6 +38,46 @@ json load(const std::string& file) {
 
 std::string hexOf(const Bytes& b) { return toHex(b.data(), b.size()); }
 
+// A scalar's meaning as a double, and a double stored as a scalar: how the vectors' JSON values
+// are compared with wire bytes (the device itself never converts through double).
+template <typename T>
+double readAs(const uint8_t* p) {
+  T v;
+  memcpy(&v, p, sizeof(T));
+  return (double)v;
+}
+double scalarAsDouble(TypeCode t, const uint8_t* p) {
+  switch (t) {
+    case kBool:
+    case kU8: return p[0];
+    case kI8: return (int8_t)p[0];
+    case kU16: return readAs<uint16_t>(p);
+    case kI16: return readAs<int16_t>(p);
+    case kU32: return readAs<uint32_t>(p);
+    case kI32: return readAs<int32_t>(p);
+    case kF32: return readAs<float>(p);
+    case kF64: return readAs<double>(p);
+    default: return 0;
+  }
+}
+template <typename T>
+void writeAs(double d, void* mem) {
+  T v = (T)d;
+  memcpy(mem, &v, sizeof(T));
+}
+void storeScalar(TypeCode t, double v, void* mem) {
+  switch (t) {
+    case kBool: *(uint8_t*)mem = v != 0; break;
+    case kU8: writeAs<uint8_t>(v, mem); break;
+    case kI8: writeAs<int8_t>(v, mem); break;
+    case kU16: writeAs<uint16_t>(v, mem); break;
+    case kI16: writeAs<int16_t>(v, mem); break;
+    case kF32: writeAs<float>(v, mem); break;
+    case kF64: writeAs<double>(v, mem); break;
+    default: break;
+  }
+}
+
 TEST(Vectors, Crc) {
   for (auto& v : load("crc.json")) {
     Bytes d = hex(v["data"]);

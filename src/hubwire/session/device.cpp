@@ -30,40 +30,26 @@ bool sameText(Text a, Text b) {
 
 // ---------------------------------------------------------------- declarations
 
-Device::Builder& Device::Builder::writable() {
-  if (!dev_.skip_) dev_.info_.access |= kWritable;
-  return *this;
+void Device::addAccess(uint8_t a) {
+  if (!skip_) info_.access |= a;
 }
-Device::Builder& Device::Builder::streamable() {
-  if (!dev_.skip_) dev_.info_.access |= kStreamable;
-  return *this;
-}
-Device::Builder& Device::Builder::range(float min, float max) {
-  if (!dev_.skip_) {
-    dev_.info_.min = min;
-    dev_.info_.max = max;
-    dev_.info_.flags |= kHasRange;
+void Device::setScalars(const void* a, const void* b, uint8_t size, ScalarOps ops) {
+  if (skip_) return;
+  info_.ops = ops;
+  if (b) {
+    memcpy(info_.min.b, a, size);
+    memcpy(info_.max.b, b, size);
+    info_.flags |= kHasRange;
+  } else {
+    memcpy(info_.failsafe.b, a, size);
+    info_.flags |= kHasFailsafe;
   }
-  return *this;
 }
-Device::Builder& Device::Builder::unit(Text u) {
-  if (!dev_.skip_) dev_.info_.unit = u;
-  return *this;
+void Device::setText(uint8_t which, Text t) {
+  if (!skip_) (which ? info_.description : info_.unit) = t;
 }
-Device::Builder& Device::Builder::describe(Text d) {
-  if (!dev_.skip_) dev_.info_.description = d;
-  return *this;
-}
-Device::Builder& Device::Builder::failsafe(float value) {
-  if (!dev_.skip_) {
-    dev_.info_.failsafe = value;
-    dev_.info_.flags |= kHasFailsafe;
-  }
-  return *this;
-}
-Device::Builder& Device::Builder::onChange(void (*fn)()) {
-  if (!dev_.skip_) dev_.info_.fn = fn;
-  return *this;
+void Device::setChange(void (*fn)()) {
+  if (!skip_) info_.fn = fn;
 }
 
 Device::Device(ByteStream& stream, Clock& clock)
@@ -71,14 +57,13 @@ Device::Device(ByteStream& stream, Clock& clock)
       stream_(stream),
       clock_(clock),
       rx_(rxBuf_, sizeof(rxBuf_)),
-      tx_(txBuf_, sizeof(txBuf_)),
-      builder_(*this) {
+      tx_(txBuf_, sizeof(txBuf_)) {
   error_ = kSetupNoDeclarations;
   peerMax_ = HUBWIRE_MAX_PAYLOAD;
   peerBeatMs_ = HUBWIRE_HEARTBEAT_MS;
 }
 
-Device::Builder& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {
+Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {
   if (pending_) finishChannel();
   ++visitId_;
   // Build only the channels this visit needs: one for a find, those in the window for a chunk.
@@ -97,18 +82,17 @@ Device::Builder& Device::declare(Text name, void* data, ValueType type, uint16_t
     info_.access = access;
   }
   pending_ = true;
-  return builder_;
+  return *this;
 }
 
-Device::Builder& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(),
-                                     Thunk thunk) {
-  Builder& b = declare(name, nullptr, ValueType{arg, 0, Text(), nullptr}, scalarSize(arg), access);
+Device& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk) {
+  declare(name, nullptr, ValueType{arg, 0, Text(), nullptr}, scalarSize(arg), access);
   if (!skip_) {
     info_.ret = ValueType{ret, 0, Text(), nullptr};
     info_.fn = fn;
     info_.thunk = thunk;
   }
-  return b;
+  return *this;
 }
 
 void Device::visit(Mode mode, uint8_t target) {
@@ -135,10 +119,10 @@ void Device::finishChannel() {
       describeChannel();
       break;
     case kFailsafe:
-      if ((info_.flags & kHasFailsafe) && info_.data && isScalar(info_.type.code)) {
+      if ((info_.flags & kHasFailsafe) && info_.data) {
         uint8_t n = info_.type.count ? info_.type.count : 1;
         uint8_t size = scalarSize(info_.type.code);
-        for (uint8_t i = 0; i < n; ++i) storeScalar(info_.type.code, info_.failsafe, (uint8_t*)info_.data + i * size);
+        for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_.data + i * size, info_.failsafe.b, size);
       }
       break;
     default:
@@ -266,13 +250,13 @@ void Device::describeChannel() {
   }
   if (info_.flags & kHasRange) {
     j.key(HUBWIRE_TEXT("min"));
-    j.number(info_.min);
+    info_.ops(info_.min.b, nullptr, nullptr, &j);
     j.key(HUBWIRE_TEXT("max"));
-    j.number(info_.max);
+    info_.ops(info_.max.b, nullptr, nullptr, &j);
   }
   if (info_.flags & kHasFailsafe) {
     j.key(HUBWIRE_TEXT("fs"));
-    j.number(info_.failsafe);
+    info_.ops(info_.failsafe.b, nullptr, nullptr, &j);
   }
   if (!info_.description.empty()) {
     j.key(HUBWIRE_TEXT("d"));
@@ -550,12 +534,10 @@ void Device::onControl(const Frame& f) {
   } else {
     const ValueType& t = info_.type;
     code = t.check(f.payload, f.len);
-    if (code == kOk && (info_.flags & kHasRange) && isScalar(t.code)) {
+    if (code == kOk && (info_.flags & kHasRange)) {
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
-      for (uint8_t i = 0; i < n && code == kOk; ++i) {
-        double v = scalarAsDouble(t.code, f.payload + i * size);
-        if (!(v >= info_.min && v <= info_.max)) code = kErrOutOfRange;  // NaN fails too
-      }
+      for (uint8_t i = 0; i < n && code == kOk; ++i)
+        if (!info_.ops(f.payload + i * size, &info_.min, &info_.max, nullptr)) code = kErrOutOfRange;
     }
     if (code == kOk) {
       if (info_.thunk) {

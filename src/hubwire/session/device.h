@@ -52,6 +52,39 @@ struct Event {
 // Returns false when the function refused the value (controls returning bool).
 typedef bool (*Thunk)(void (*fn)(), const uint8_t* arg, uint8_t* ret);
 
+// Room for one scalar of any type the board carries: a range limit or a failsafe value, kept in
+// the channel's own type so that no value is ever converted (no soft-float code on AVR).
+struct ScalarBytes {
+  uint8_t b[HUBWIRE_HAS_F64 ? 8 : 4];
+};
+// Writes an integer or float as a JSON number.
+template <typename T>
+void putNumber(JsonWindow& j, T v) {
+  const TypeCode c = TypeOf<T>::code;
+  if (c == kI8 || c == kI16 || c == kI32) {
+    j.integer((int32_t)v);
+  } else {
+    j.uinteger((uint32_t)v);
+  }
+}
+inline void putNumber(JsonWindow& j, float v) { j.number(v); }
+inline void putNumber(JsonWindow& j, double v) { j.number((float)v); }
+
+// What a range or failsafe needs to know about its type, instantiated only for the types that are
+// given one: a sketch without float ranges links no float comparison or printing.
+// print != null: writes *v as a JSON number and returns true. Otherwise: *v within [*lo, *hi]?
+typedef bool (*ScalarOps)(const uint8_t* v, const ScalarBytes* lo, const ScalarBytes* hi, JsonWindow* print);
+
+template <typename T>
+bool scalarOps(const uint8_t* v, const ScalarBytes* lo, const ScalarBytes* hi, JsonWindow* print) {
+  T x, a, b;
+  memcpy(&x, v, sizeof(T));
+  if (print) return putNumber(*print, x), true;
+  memcpy(&a, lo->b, sizeof(T));
+  memcpy(&b, hi->b, sizeof(T));
+  return x >= a && x <= b;  // NaN fails
+}
+
 // Everything the declarations say about the channel being visited.
 struct ChannelInfo {
   Text name, unit, description;
@@ -60,7 +93,8 @@ struct ChannelInfo {
   void* data;        // the variable behind a readable/writable channel
   void (*fn)();      // change callback, or the function a control/action calls
   Thunk thunk;       // how to call fn with an argument
-  float min, max, failsafe;
+  ScalarOps ops;     // range / failsafe: their type's comparison and printing
+  ScalarBytes min, max, failsafe;
   uint16_t memSize;  // sizeof the variable, to check struct layouts
   uint8_t access;
   uint8_t flags;
@@ -138,21 +172,26 @@ class Device : private DeviceState {
  public:
   enum Flags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
 
-  // Returned by every declaration; chain options onto it.
+  // Returned by every declaration; chain options onto it. T is the channel's scalar type (range
+  // and failsafe take values of it), or Unranged for strings, structs and events.
+  struct Unranged {};
+  template <typename T>
   class Builder {
    public:
-    Builder& writable();
-    Builder& streamable();
-    Builder& range(float min, float max);
-    Builder& unit(Text u);
-    Builder& describe(Text d);
-    Builder& failsafe(float value);
+    Builder& writable() { return dev_.addAccess(kWritable), *this; }
+    Builder& streamable() { return dev_.addAccess(kStreamable), *this; }
+    // Writes outside [min, max] (any element of an array) are refused with NAK OUT_OF_RANGE.
+    Builder& range(T min, T max) { return dev_.setScalars(&min, &max, sizeof(T), &scalarOps<T>), *this; }
+    Builder& unit(Text u) { return dev_.setText(0, u), *this; }
+    Builder& describe(Text d) { return dev_.setText(1, d), *this; }
+    // The value (every element of an array) is set to this when the link is lost.
+    Builder& failsafe(T value) { return dev_.setScalars(&value, nullptr, sizeof(T), &scalarOps<T>), *this; }
     // Called after the hub wrote a new value into the variable.
-    Builder& onChange(void (*fn)());
+    Builder& onChange(void (*fn)()) { return dev_.setChange(fn), *this; }
 
    private:
     friend class Device;
-    explicit Builder(Device& d) : dev_(d) {}
+    Builder(Device& d) : dev_(d) {}  // NOLINT: declarations return *this
     Device& dev_;
   };
 
@@ -162,58 +201,58 @@ class Device : private DeviceState {
 
   // A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
   template <typename T>
-  Builder& expose(Text name, T& var) {
+  Builder<T> expose(Text name, T& var) {
     return declare(name, &var, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kReadable);
   }
   template <typename T, size_t N>
-  Builder& expose(Text name, T (&arr)[N]) {
+  Builder<T> expose(Text name, T (&arr)[N]) {
     static_assert(N <= 255, "arrays hold at most 255 elements");
     return declare(name, arr, ValueType{TypeOf<T>::code, (uint8_t)N, Text(), nullptr}, sizeof(arr), kReadable);
   }
   template <size_t N>
-  Builder& expose(Text name, char (&str)[N]) {
+  Builder<Unranged> expose(Text name, char (&str)[N]) {
     static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
     return declare(name, str, ValueType{kStr, (uint8_t)(N - 1), Text(), nullptr}, N, kReadable);
   }
   // A struct with named fields, laid out by text such as F("ax:f32,ay:f32,gyro:i16[3]").
   template <typename T>
-  Builder& expose(Text name, T& var, Text layout) {
+  Builder<Unranged> expose(Text name, T& var, Text layout) {
     return declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
   }
 
   // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
   template <typename T>
-  Builder& control(Text name, void (*fn)(T)) {
+  Builder<T> control(Text name, void (*fn)(T)) {
     return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callVoid<T>);
   }
   template <typename T>
-  Builder& control(Text name, bool (*fn)(T)) {
+  Builder<T> control(Text name, bool (*fn)(T)) {
     return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callChecked<T>);
   }
 
   // A callable action: the hub calls fn with an argument and gets its return value.
   template <typename R, typename A>
-  Builder& action(Text name, R (*fn)(A)) {
+  Builder<A> action(Text name, R (*fn)(A)) {
     return declareCall(name, kCallable, TypeOf<A>::code, TypeOf<R>::code, (void (*)())fn, &callRet<R, A>);
   }
   template <typename A>
-  Builder& action(Text name, void (*fn)(A)) {
+  Builder<A> action(Text name, void (*fn)(A)) {
     return declareCall(name, kCallable, TypeOf<A>::code, kVoid, (void (*)())fn, &callVoid<A>);
   }
   template <typename R>
-  Builder& action(Text name, R (*fn)()) {
+  Builder<Unranged> action(Text name, R (*fn)()) {
     return declareCall(name, kCallable, kVoid, TypeOf<R>::code, (void (*)())fn, &callNoArg<R>);
   }
-  Builder& action(Text name, void (*fn)()) {
+  Builder<Unranged> action(Text name, void (*fn)()) {
     return declareCall(name, kCallable, kVoid, kVoid, fn, &callPlain);
   }
 
   // An event the sketch emits; the hub is told exactly once.
   template <typename T>
-  Builder& event(Text name, Event<T>& ev) {
-    Builder& b = declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kEventAccess);
+  Builder<Unranged> event(Text name, Event<T>& ev) {
+    declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kEventAccess);
     if (!skip_) info_.eventId = &ev.id;
-    return b;
+    return *this;
   }
 
   // ---- running ----
@@ -248,8 +287,12 @@ class Device : private DeviceState {
   const LinkCounters& counters() const { return rx_.counters; }
 
  private:
-  Builder& declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access);
-  Builder& declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk);
+  Device& declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access);
+  Device& declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk);
+  void addAccess(uint8_t a);
+  void setScalars(const void* a, const void* b, uint8_t size, ScalarOps ops);  // b null: failsafe
+  void setText(uint8_t which, Text t);  // 0 unit, 1 description
+  void setChange(void (*fn)());
   void finishChannel();  // the visited channel is complete: act on it for the current mode
   void visit(Mode mode, uint8_t target = 0);
   bool find(uint8_t id);  // info_ describes channel id afterwards
@@ -316,7 +359,6 @@ class Device : private DeviceState {
   FrameWriter tx_;
   Text name_, firmware_;
   ChannelInfo info_;  // the channel being visited
-  Builder builder_;
 };
 
 }  // namespace hubwire

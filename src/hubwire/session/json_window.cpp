@@ -53,6 +53,11 @@ void JsonWindow::uinteger(uint32_t v) {
   while (n) put(digits[--n]);
 }
 
+void JsonWindow::integer(int32_t v) {
+  if (v < 0) put('-');
+  uinteger(v < 0 ? 0u - (uint32_t)v : (uint32_t)v);
+}
+
 // Integers exactly (any size), other values with six rounded decimals, trailing zeros dropped. Only
 // integer arithmetic on the float's bits: the soft-float add, multiply and divide routines this
 // would otherwise pull in cost about 1 KB of flash on AVR.

@@ -21,6 +21,7 @@ class JsonWindow {
   void key(Text k);         // ,"k": or "k": as needed
   void number(float v);
   void uinteger(uint32_t v);
+  void integer(int32_t v);
 
   uint16_t length() const { return pos_; }
   // True once every character of the window has been produced (never when only counting).

@@ -117,11 +117,6 @@ struct ValueType {
   void fromWire(const uint8_t* wire, uint16_t len, void* mem) const;
 };
 
-// Reads scalar i of a wire value as a double, for range checks (scalars and arrays).
-double scalarAsDouble(TypeCode t, const uint8_t* p);
-// Stores a double into one scalar in memory (used for failsafe values).
-void storeScalar(TypeCode t, double v, void* mem);
-
 }  // namespace hubwire
 
 #endif
