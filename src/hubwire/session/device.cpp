@@ -5,27 +5,7 @@
 namespace hubwire {
 
 namespace {
-const uint8_t kMaxNameLength = 32;
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
-
-bool validName(Text n) {
-  uint16_t len = n.length();
-  if (len == 0 || len > kMaxNameLength) return false;
-  for (uint16_t i = 0; i < len; ++i) {
-    char c = n.at(i);
-    bool alpha = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
-    if (!alpha && !(i > 0 && c >= '0' && c <= '9')) return false;
-  }
-  return true;
-}
-
-bool sameText(Text a, Text b) {
-  for (uint16_t i = 0;; ++i) {
-    char c = a.at(i);
-    if (c != b.at(i)) return false;
-    if (c == 0) return true;
-  }
-}
 }  // namespace
 
 // ---------------------------------------------------------------- declarations
@@ -137,48 +117,18 @@ bool Device::find(uint8_t id) {
 }
 
 void Device::checkChannel() {
-  if (error_ != kSetupOk) return;
   uint8_t id = visitId_;
-  SetupError e = kSetupOk;
-  const ValueType& t = info_.type;
-  if (id > HUBWIRE_MAX_CHANNELS) {
-    e = kSetupTooManyChannels;
-  } else if (!validName(info_.name)) {
-    e = kSetupBadName;
-  } else if (t.code == kVoid && !(info_.access & kCallable)) {
-    e = kSetupBadType;  // a variable of a type Hubwire cannot carry (e.g. 8-byte integers)
-  } else if (t.code == kStruct) {
-    LayoutReader r(t.layout);
-    LayoutField f;
-    uint8_t n = 0;
-    while (t.structs(kStructNext, t.layout, &r, &f, 0)) ++n;
-    if (!r.ok || n == 0 || t.memSize() != info_.memSize) e = kSetupBadLayout;
-  }
-  if (e == kSetupOk) {
-    uint16_t size = t.wireSize() > info_.ret.wireSize() ? t.wireSize() : info_.ret.wireSize();
-    if (size + kSampleHeader > HUBWIRE_MAX_PAYLOAD || info_.ret.wireSize() > HUBWIRE_MAX_RETURN ||
-        ((info_.access & kEventAccess) && size > HUBWIRE_EVENT_MAX_PAYLOAD))
-      e = kSetupTooLarge;
-#if !HUBWIRE_HAS_F64
-    if (t.code == kF64 || info_.ret.code == kF64) e = kSetupBadType;
-#endif
-  }
-  if (e == kSetupOk && info_.eventId) *info_.eventId = id;
-  if (e == kSetupOk && id <= HUBWIRE_MAX_CHANNELS) {  // remember a name-hash clash; begin() checks it
-    uint16_t h = 0x1D0F;
-    for (uint16_t i = 0; info_.name.at(i); ++i) h = (uint16_t)((h ^ (uint8_t)info_.name.at(i)) * 0x0101u + 7);
-    for (uint8_t other = 1; other < id && !dupA_; ++other)
-      if (nameHashes_[other - 1] == h) {
-        dupA_ = other;
-        dupB_ = id;
-      }
-    nameHashes_[id - 1] = h;
-  }
-  if (e != kSetupOk) {
-    error_ = e;
-    errorChannel_ = id;
-  }
   channelCount_ = id;
+  if (error_ != kSetupOk) return;
+  if (id > HUBWIRE_MAX_CHANNELS) {
+    error_ = kSetupTooManyChannels;
+  } else if (info_.type.code == kStruct && info_.type.memSize() != info_.memSize) {
+    error_ = kSetupBadLayout;  // memSize() is 0 for a malformed layout
+  } else {
+    if (info_.eventId) *info_.eventId = id;
+    return;
+  }
+  errorChannel_ = id;
 }
 
 // ---------------------------------------------------------------- descriptor
@@ -310,35 +260,7 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
   channelCount_ = 0;
   errorChannel_ = 0;
   error_ = declarations ? kSetupOk : kSetupNoDeclarations;
-  uint16_t hashes[HUBWIRE_MAX_CHANNELS];
-  nameHashes_ = hashes;
-  dupA_ = dupB_ = 0;
   if (error_ == kSetupOk) visit(kCheck);
-  nameHashes_ = nullptr;
-  if (error_ == kSetupOk && !validName(name)) error_ = kSetupBadName;
-  // Unique names: one pass hashed them; only a hash clash needs the names compared. A clash of
-  // different names (rare) falls back to comparing every pair.
-  if (error_ == kSetupOk && dupA_) {
-    find(dupA_);
-    Text a = info_.name;
-    find(dupB_);
-    bool same = sameText(a, info_.name);
-    for (uint8_t x = 2; x <= channelCount_ && !same; ++x) {
-      find(x);
-      Text nx = info_.name;
-      for (uint8_t y = 1; y < x && !same; ++y) {
-        find(y);
-        if (sameText(nx, info_.name)) {
-          same = true;
-          dupB_ = x;
-        }
-      }
-    }
-    if (same) {
-      error_ = kSetupBadName;
-      errorChannel_ = dupB_;
-    }
-  }
   if (error_ != kSetupOk) {
     started_ = false;
     return false;

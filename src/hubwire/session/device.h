@@ -25,14 +25,14 @@ namespace hubwire {
 enum Access : uint8_t { kReadable = 1, kWritable = 2, kCallable = 4, kEventAccess = 8, kStreamable = 16 };
 
 // Why begin() refused the declarations; see Device::error() and errorChannel().
+// Types and sizes are checked when the sketch compiles (static_assert), and names by the hub, which
+// reports a malformed or repeated name with its channel when it reads the descriptor: the board
+// spends no flash on either. What only the running board can tell is checked by begin().
 enum SetupError : uint8_t {
   kSetupOk = 0,
   kSetupNoDeclarations,
   kSetupTooManyChannels,  // more than HUBWIRE_MAX_CHANNELS
-  kSetupBadName,          // not [A-Za-z_][A-Za-z0-9_]*, longer than 32, or used twice
   kSetupBadLayout,        // struct layout text malformed, or its size differs from sizeof(struct)
-  kSetupTooLarge,         // value does not fit HUBWIRE_MAX_PAYLOAD (or an event HUBWIRE_EVENT_MAX_PAYLOAD)
-  kSetupBadType,          // a type the board cannot carry (f64 without 8-byte double)
 };
 
 // Keeps a template argument from being deduced from a second parameter (emit(ev, 1.5) with
@@ -126,8 +126,6 @@ struct DeviceState {
   // instead of producing the descriptor from its first character again.
   uint8_t resumeId_, resumeCandidate_, resumeFrom_;
   uint16_t resumePos_, resumeCandidatePos_;
-  uint16_t* nameHashes_;  // begin() only: one per channel, to find duplicate names in one pass
-  uint8_t dupA_, dupB_;   // begin() only: two channels whose names share a hash
 
   // Session.
   uint32_t seed_, nonce_, hubNonce_;
@@ -173,8 +171,8 @@ class Device : private DeviceState {
   enum Flags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
 
   // Returned by every declaration; chain options onto it. T is the channel's scalar type (range
-  // and failsafe take values of it), or Unranged for strings, structs and events.
-  struct Unranged {};
+  // and failsafe take values of it), or NotNumeric for strings, structs and events.
+  struct NotNumeric {};
   template <typename T>
   class Builder {
    public:
@@ -198,58 +196,71 @@ class Device : private DeviceState {
   Device(ByteStream& stream, Clock& clock);
 
   // ---- declarations: call these only inside the function given to begin() ----
+  // A declaration the library cannot carry fails to compile, saying why.
 
   // A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
   template <typename T>
   Builder<T> expose(Text name, T& var) {
+    checkValue<T, sizeof(T)>();
     return declare(name, &var, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kReadable);
   }
   template <typename T, size_t N>
   Builder<T> expose(Text name, T (&arr)[N]) {
     static_assert(N <= 255, "arrays hold at most 255 elements");
+    checkValue<T, sizeof(arr)>();
     return declare(name, arr, ValueType{TypeOf<T>::code, (uint8_t)N, Text(), nullptr}, sizeof(arr), kReadable);
   }
   template <size_t N>
-  Builder<Unranged> expose(Text name, char (&str)[N]) {
+  Builder<NotNumeric> expose(Text name, char (&str)[N]) {
     static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
+    static_assert(N + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "string longer than HUBWIRE_MAX_PAYLOAD - 3: raise it");
     return declare(name, str, ValueType{kStr, (uint8_t)(N - 1), Text(), nullptr}, N, kReadable);
   }
   // A struct with named fields, laid out by text such as F("ax:f32,ay:f32,gyro:i16[3]").
   template <typename T>
-  Builder<Unranged> expose(Text name, T& var, Text layout) {
+  Builder<NotNumeric> expose(Text name, T& var, Text layout) {
+    static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
     return declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
   }
 
   // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
   template <typename T>
   Builder<T> control(Text name, void (*fn)(T)) {
+    checkValue<T, sizeof(T)>();
     return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callVoid<T>);
   }
   template <typename T>
   Builder<T> control(Text name, bool (*fn)(T)) {
+    checkValue<T, sizeof(T)>();
     return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callChecked<T>);
   }
 
   // A callable action: the hub calls fn with an argument and gets its return value.
   template <typename R, typename A>
   Builder<A> action(Text name, R (*fn)(A)) {
+    checkValue<A, sizeof(A)>();
+    checkReturn<R>();
     return declareCall(name, kCallable, TypeOf<A>::code, TypeOf<R>::code, (void (*)())fn, &callRet<R, A>);
   }
   template <typename A>
   Builder<A> action(Text name, void (*fn)(A)) {
+    checkValue<A, sizeof(A)>();
     return declareCall(name, kCallable, TypeOf<A>::code, kVoid, (void (*)())fn, &callVoid<A>);
   }
   template <typename R>
-  Builder<Unranged> action(Text name, R (*fn)()) {
+  Builder<NotNumeric> action(Text name, R (*fn)()) {
+    checkReturn<R>();
     return declareCall(name, kCallable, kVoid, TypeOf<R>::code, (void (*)())fn, &callNoArg<R>);
   }
-  Builder<Unranged> action(Text name, void (*fn)()) {
+  Builder<NotNumeric> action(Text name, void (*fn)()) {
     return declareCall(name, kCallable, kVoid, kVoid, fn, &callPlain);
   }
 
   // An event the sketch emits; the hub is told exactly once.
   template <typename T>
-  Builder<Unranged> event(Text name, Event<T>& ev) {
+  Builder<NotNumeric> event(Text name, Event<T>& ev) {
+    checkValue<T, sizeof(T)>();
+    static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
     declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kEventAccess);
     if (!skip_) info_.eventId = &ev.id;
     return *this;
@@ -320,6 +331,17 @@ class Device : private DeviceState {
   void sendNak(const Frame& f, uint8_t code);
   void reply(uint8_t type, const Frame& f, uint8_t len);
   uint8_t maxOut() const { return peerMax_ < HUBWIRE_MAX_PAYLOAD ? peerMax_ : HUBWIRE_MAX_PAYLOAD; }
+
+  template <typename T, size_t Bytes>
+  static void checkValue() {
+    static_assert(TypeOf<T>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+    static_assert(Bytes + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "value larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  }
+  template <typename R>
+  static void checkReturn() {
+    static_assert(TypeOf<R>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+    static_assert(sizeof(R) <= HUBWIRE_MAX_RETURN, "return value larger than HUBWIRE_MAX_RETURN: raise it");
+  }
 
   template <typename T>
   static bool callVoid(void (*fn)(), const uint8_t* arg, uint8_t*) {

@@ -127,7 +127,7 @@ uint16_t structMemSize(Text layout) {
     if (a > maxAlign) maxAlign = a;
     n = (uint16_t)(alignUp(n, a) + fieldBytes(f));
   }
-  return alignUp(n, maxAlign);
+  return r.ok ? alignUp(n, maxAlign) : 0;  // 0 also for an empty layout
 }
 
 // Copies field by field between the packed wire form and the aligned memory form.

@@ -107,7 +107,7 @@ struct ValueType {
 
   // Bytes of the value on the wire; for a string, its largest encoding (1 + capacity).
   uint16_t wireSize() const;
-  // Bytes of the value in memory.
+  // Bytes of the value in memory; 0 for a malformed struct layout.
   uint16_t memSize() const;
   // Copies a value from memory to its wire form; returns the wire length.
   uint16_t toWire(const void* mem, uint8_t* wire) const;
