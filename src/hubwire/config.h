@@ -3,6 +3,17 @@
 #ifndef HUBWIRE_CONFIG_H
 #define HUBWIRE_CONFIG_H
 
+// f64 values exist only where double is 8 bytes (not on AVR, where double is float).
+#if defined(__SIZEOF_DOUBLE__) && __SIZEOF_DOUBLE__ == 8
+#define HUBWIRE_HAS_F64 1
+#else
+#define HUBWIRE_HAS_F64 0
+#endif
+
+// The largest scalar the board carries: 8 bytes with f64, else 4. Events and action return values
+// are scalars, so this is all their buffers ever need.
+#define HUBWIRE_LARGEST_SCALAR (HUBWIRE_HAS_F64 ? 8 : 4)
+
 // Largest payload the device accepts and sends (bytes). Sets both frame buffers: 2 x (5 + this).
 #ifndef HUBWIRE_MAX_PAYLOAD
 #define HUBWIRE_MAX_PAYLOAD 32
@@ -13,7 +24,7 @@
 #define HUBWIRE_EVENT_QUEUE 4
 #endif
 #ifndef HUBWIRE_EVENT_MAX_PAYLOAD
-#define HUBWIRE_EVENT_MAX_PAYLOAD 8
+#define HUBWIRE_EVENT_MAX_PAYLOAD HUBWIRE_LARGEST_SCALAR
 #endif
 
 // Channels the hub may subscribe to at the same time.
@@ -24,7 +35,7 @@
 // Largest return value of a callable action (bytes), kept to answer a retried call without
 // calling the function twice.
 #ifndef HUBWIRE_MAX_RETURN
-#define HUBWIRE_MAX_RETURN 8
+#define HUBWIRE_MAX_RETURN HUBWIRE_LARGEST_SCALAR
 #endif
 
 // Highest channel id (channels are numbered 1..N in declaration order).
@@ -50,12 +61,6 @@
 #define HUBWIRE_LOST_AFTER_BEATS 4
 #endif
 
-// f64 values exist only where double is 8 bytes (not on AVR, where double is float).
-#if defined(__SIZEOF_DOUBLE__) && __SIZEOF_DOUBLE__ == 8
-#define HUBWIRE_HAS_F64 1
-#else
-#define HUBWIRE_HAS_F64 0
-#endif
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "Hubwire copies values as little-endian memory; big-endian targets are not supported"

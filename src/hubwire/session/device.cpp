@@ -68,7 +68,7 @@ Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize,
 Device& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk) {
   declare(name, nullptr, ValueType{arg, 0, Text(), nullptr}, scalarSize(arg), access);
   if (!skip_) {
-    info_.ret = ValueType{ret, 0, Text(), nullptr};
+    info_.ret = ret;
     info_.fn = fn;
     info_.thunk = thunk;
   }
@@ -143,22 +143,16 @@ static void putAccess(JsonWindow& j, uint8_t a) {
   j.put('"');
 }
 
-static void putType(JsonWindow& j, Text typeKey, Text countKey, const ValueType& t) {
-  j.key(typeKey);
-  j.text(typeName(t.code));
-  if (t.count) {
-    j.key(countKey);
-    j.uinteger(t.count);
-  }
-  if (t.code != kStruct) return;
+static void putType(JsonWindow& j, TypeCode code) { j.text(typeName(code)); }
+
+// "f":[{"n":"ax","t":"f32"},...] from the layout text "ax:f32,...".
+void Device::describeFields(JsonWindow& j, const ValueType& t) {
   j.key(HUBWIRE_TEXT("f"));
   j.put('[');
   LayoutReader r(t.layout);
   LayoutField f;
-  bool first = true;
   while (t.structs(kStructNext, t.layout, &r, &f, 0)) {
-    if (!first) j.put(',');
-    first = false;
+    if (f.nameStart) j.put(',');
     j.put('{');
     j.noComma();
     j.key(HUBWIRE_TEXT("n"));
@@ -166,7 +160,7 @@ static void putType(JsonWindow& j, Text typeKey, Text countKey, const ValueType&
     for (uint16_t i = 0; i < f.nameLen; ++i) j.put(t.layout.at((uint16_t)(f.nameStart + i)));
     j.put('"');
     j.key(HUBWIRE_TEXT("t"));
-    j.text(typeName(f.code));
+    putType(j, f.code);
     if (f.count) {
       j.key(HUBWIRE_TEXT("c"));
       j.uinteger(f.count);
@@ -191,9 +185,17 @@ void Device::describeChannel() {
   j.text(info_.name);
   j.key(HUBWIRE_TEXT("a"));
   putAccess(j, info_.access);
-  putType(j, HUBWIRE_TEXT("t"), HUBWIRE_TEXT("c"), info_.type);
-  if ((info_.access & kCallable) && info_.ret.code != kVoid)
-    putType(j, HUBWIRE_TEXT("rt"), HUBWIRE_TEXT("rc"), info_.ret);
+  j.key(HUBWIRE_TEXT("t"));
+  putType(j, info_.type.code);
+  if (info_.type.count) {
+    j.key(HUBWIRE_TEXT("c"));
+    j.uinteger(info_.type.count);
+  }
+  if (info_.fields) info_.fields(j, info_.type);
+  if (info_.ret != kVoid) {
+    j.key(HUBWIRE_TEXT("rt"));
+    putType(j, info_.ret);
+  }
   if (!info_.unit.empty()) {
     j.key(HUBWIRE_TEXT("u"));
     j.text(info_.unit);
@@ -466,9 +468,9 @@ void Device::onControl(const Frame& f) {
         uint8_t* ret = tx_.payload();
         if (!info_.thunk(info_.fn, f.payload, ret)) {
           code = kErrRejected;
-        } else if (info_.ret.code != kVoid) {
+        } else if (info_.ret != kVoid) {
           type = kMsgResponse;
-          len = (uint8_t)info_.ret.wireSize();
+          len = scalarSize(info_.ret);
         }
       } else {
         t.fromWire(f.payload, f.len, info_.data);

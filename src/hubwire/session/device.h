@@ -89,7 +89,7 @@ bool scalarOps(const uint8_t* v, const ScalarBytes* lo, const ScalarBytes* hi, J
 struct ChannelInfo {
   Text name, unit, description;
   ValueType type;    // value, call argument, or event value
-  ValueType ret;     // callables: return value
+  TypeCode ret;      // callables: return value (a scalar)
   void* data;        // the variable behind a readable/writable channel
   void (*fn)();      // change callback, or the function a control/action calls
   Thunk thunk;       // how to call fn with an argument
@@ -99,6 +99,7 @@ struct ChannelInfo {
   uint8_t access;
   uint8_t flags;
   uint8_t* eventId;  // events: the handle's id, set by begin()
+  void (*fields)(JsonWindow& j, const ValueType& t);  // structs: describes the fields
 };
 
 // Everything a Device changes while it runs, kept apart from its references so that one
@@ -220,7 +221,9 @@ class Device : private DeviceState {
   template <typename T>
   Builder<NotNumeric> expose(Text name, T& var, Text layout) {
     static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
-    return declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
+    declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
+    if (!skip_) info_.fields = &describeFields;  // referenced only here: no struct, no code
+    return *this;
   }
 
   // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
@@ -308,6 +311,7 @@ class Device : private DeviceState {
   void visit(Mode mode, uint8_t target = 0);
   bool find(uint8_t id);  // info_ describes channel id afterwards
   void describeChannel();
+  static void describeFields(JsonWindow& j, const ValueType& t);
   uint16_t describe(uint16_t start, uint16_t len, uint8_t* out);  // copies a window of the JSON
   void describeAll(JsonWindow& j);
   void describeHead(JsonWindow& j);  // {"p":1,"n":...,"ch":[

@@ -25,10 +25,9 @@ void JsonWindow::text(Text t) {
       put('\\');
       put(c);
     } else if ((uint8_t)c < 0x20) {  // control characters: \u00XX
-      static const char kHex[] = "0123456789abcdef";
       raw("\\u00");
-      put(kHex[(uint8_t)c >> 4]);
-      put(kHex[c & 15]);
+      put((char)('0' + ((uint8_t)c >> 4)));  // c < 0x20: the high digit is 0 or 1
+      put((char)((c & 15) < 10 ? '0' + (c & 15) : 'a' + (c & 15) - 10));
     } else {
       put(c);
     }

@@ -72,8 +72,8 @@ void FrameWriter::send(ByteStream& out, uint8_t type, uint8_t seq, uint8_t id, u
   uint16_t n = (uint16_t)(kFrameHeader + len);
   storeU16(buf_ + n, crc16(buf_, n));
   cobsEncodeTo(buf_, n + 2u, out);
-  static const uint8_t kDelimiter = 0;
-  out.write(&kDelimiter, 1);
+  uint8_t delimiter = 0;
+  out.write(&delimiter, 1);
 }
 
 size_t encodeFrame(uint8_t type, uint8_t seq, uint8_t id, const uint8_t* payload, uint8_t len, uint8_t* out) {

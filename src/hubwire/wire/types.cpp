@@ -39,24 +39,9 @@ uint16_t alignUp(uint16_t v, uint8_t a) { return (uint16_t)((v + a - 1) / a * a)
 
 }  // namespace
 
-uint8_t scalarSize(TypeCode t) {
-  switch (t) {
-    case kBool:
-    case kU8:
-    case kI8:
-      return 1;
-    case kU16:
-    case kI16:
-      return 2;
-    case kU32:
-    case kI32:
-    case kF32:
-      return 4;
-    case kF64:
-      return 8;
-    default:
-      return 0;
-  }
+uint8_t scalarSize(TypeCode t) {  // arithmetic, not a switch: AVR keeps switch tables in RAM
+  if (t == kVoid || t > kF64) return 0;
+  return t <= kI8 ? 1 : t <= kI16 ? 2 : t <= kF32 ? 4 : 8;
 }
 
 bool isScalar(TypeCode t) { return t >= kBool && t <= kF64; }
