@@ -78,6 +78,11 @@ static_assert(HUBWIRE_MAX_RETURN >= 1 && HUBWIRE_MAX_RETURN <= HUBWIRE_MAX_PAYLO
 static_assert(HUBWIRE_MAX_CHANNELS >= 1 && HUBWIRE_MAX_CHANNELS <= 255, "HUBWIRE_MAX_CHANNELS must be 1..255");
 static_assert(HUBWIRE_HEARTBEAT_MS >= 10 && HUBWIRE_HEARTBEAT_MS <= 60000, "HUBWIRE_HEARTBEAT_MS must be 10..60000");
 static_assert(HUBWIRE_LOST_AFTER_BEATS >= 2, "HUBWIRE_LOST_AFTER_BEATS must be at least 2");
+// The device keeps 16-bit millisecond times: every interval must stay below 65.5 s.
+static_assert((long)HUBWIRE_HEARTBEAT_MS * HUBWIRE_LOST_AFTER_BEATS <= 65535L,
+              "HUBWIRE_HEARTBEAT_MS x HUBWIRE_LOST_AFTER_BEATS must be at most 65535 ms");
+static_assert(HUBWIRE_ANNOUNCE_MS >= 10 && HUBWIRE_ANNOUNCE_MS <= 60000, "HUBWIRE_ANNOUNCE_MS must be 10..60000");
+static_assert(HUBWIRE_EVENT_RETRY_MS >= 10 && HUBWIRE_EVENT_RETRY_MS <= 60000, "HUBWIRE_EVENT_RETRY_MS must be 10..60000");
 }  // namespace hubwire
 
 #endif

@@ -551,6 +551,20 @@ TEST_F(Session, LinkLossTimeoutFollowsTheHubsHeartbeat) {
   EXPECT_FALSE(device.linked());
 }
 
+// Device times are 16-bit milliseconds: a slow hub's timeout is capped just below 65.5 s, and
+// still measured exactly across the 16-bit wrap of millis().
+TEST_F(Session, SlowHubHeartbeatIsCappedBelowTheSixteenBitClock) {
+  clock.now = 0xFFFF0000u - 5;
+  drain(stream);
+  sendFrame(stream, '*', 0, 0, hubHello(3, 0, 1, 60000));
+  pump();
+  const uint32_t cap = 65535u / HUBWIRE_LOST_AFTER_BEATS * HUBWIRE_LOST_AFTER_BEATS;
+  pump(cap - 1);
+  EXPECT_TRUE(device.linked());
+  pump(1);
+  EXPECT_FALSE(device.linked());
+}
+
 TEST_F(Session, EventsAreRetriedWithTheSameSeqUntilAcked) {
   link();
   pump();  // first heartbeat

@@ -40,7 +40,7 @@ Device::Device(ByteStream& stream, Clock& clock)
       tx_(txBuf_, sizeof(txBuf_)) {
   error_ = kSetupNoDeclarations;
   peerMax_ = HUBWIRE_MAX_PAYLOAD;
-  peerBeatMs_ = HUBWIRE_HEARTBEAT_MS;
+  lostAfterMs_ = HUBWIRE_HEARTBEAT_MS * HUBWIRE_LOST_AFTER_BEATS;
 }
 
 Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {
@@ -281,7 +281,7 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
   nonce_ = 0;
   started_ = true;
   linked_ = false;
-  lastAnnounce_ = clock_.millis();  // the first announcement follows one interval after boot
+  lastAnnounce_ = ms();  // the first announcement follows one interval after boot
   return true;
 }
 
@@ -303,25 +303,25 @@ void Device::update() {
     if (c < 0) break;
     if (rx_.feed((uint8_t)c)) handle(rx_.frame());
   }
-  uint32_t now = clock_.millis();
+  uint16_t now = ms();
   if (!linked_) {
-    if (now - lastAnnounce_ >= HUBWIRE_ANNOUNCE_MS) {
+    if ((uint16_t)(now - lastAnnounce_) >= HUBWIRE_ANNOUNCE_MS) {
       lastAnnounce_ = now;
       sendHello(false);
     }
     return;
   }
-  if (now - lastRx_ >= (uint32_t)peerBeatMs_ * HUBWIRE_LOST_AFTER_BEATS) {
+  if ((uint16_t)(now - lastRx_) >= lostAfterMs_) {
     loseLink();
     return;
   }
-  if (!beatSent_ || now - lastBeat_ >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat();
-  if (eventCount_ && (!eventInFlight_ || now - eventSentAt_ >= HUBWIRE_EVENT_RETRY_MS)) sendEvent();
+  if (!beatSent_ || (uint16_t)(now - lastBeat_) >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat(now);
+  if (eventCount_ && (!eventInFlight_ || (uint16_t)(now - eventSentAt_) >= HUBWIRE_EVENT_RETRY_MS)) sendEvent(now);
   sendSamples();
 }
 
 void Device::handle(const Frame& f) {
-  lastRx_ = clock_.millis();
+  lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
       onHello(f);
@@ -390,7 +390,9 @@ void Device::onHello(const Frame& f) {
   uint16_t max = loadU16(p + 6);
   peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
   uint16_t beat = loadU16(p + 8);
-  peerBeatMs_ = beat < 10 ? 10 : beat;
+  // Times are 16-bit milliseconds: the timeout must stay below 65.5 s.
+  const uint16_t kMaxBeat = 65535u / HUBWIRE_LOST_AFTER_BEATS;
+  lostAfterMs_ = (uint16_t)((beat < 10 ? 10 : beat > kMaxBeat ? kMaxBeat : beat) * HUBWIRE_LOST_AFTER_BEATS);
   if (!linked_) {
     linked_ = true;
     beatSent_ = false;
@@ -414,7 +416,7 @@ void Device::loseLink() {
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
 #endif
-  lastAnnounce_ = clock_.millis();
+  lastAnnounce_ = ms();
   if (onLinkLost_) onLinkLost_();
 }
 
@@ -511,7 +513,7 @@ void Device::onSubscribe(const Frame& f) {
     if (interval < HUBWIRE_MIN_STREAM_INTERVAL_MS) interval = HUBWIRE_MIN_STREAM_INTERVAL_MS;
     slot->id = f.id;
     slot->interval = interval;
-    slot->due = (uint16_t)clock_.millis();
+    slot->due = ms();
     slot->first = true;
   }
 #else
@@ -526,7 +528,7 @@ void Device::sendSamples() {
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
     Subscription& s = streams_[i];
     if (!s.id) continue;
-    uint16_t now = (uint16_t)clock_.millis();
+    uint16_t now = ms();
     if ((int16_t)(now - s.due) < 0) continue;
     if (!find(s.id)) {
       s.id = 0;
@@ -555,7 +557,7 @@ bool Device::emitRaw(uint8_t id, const void* value, ValueType type) {
   return true;
 }
 
-void Device::sendEvent() {
+void Device::sendEvent(uint16_t now) {
   QueuedEvent& e = events_[eventHead_];
   if (!eventInFlight_) {
     ++eventSeq_;  // a new event: a new seq. A retry keeps it.
@@ -563,7 +565,7 @@ void Device::sendEvent() {
   }
   memcpy(tx_.payload(), e.data, e.len);
   tx_.send(stream_, kMsgEvent, eventSeq_, e.id, e.len);
-  eventSentAt_ = clock_.millis();
+  eventSentAt_ = now;
 }
 
 void Device::sendHello(bool isReply) {
@@ -579,13 +581,11 @@ void Device::sendHello(bool isReply) {
   tx_.send(stream_, kMsgHello, 0, 0, kHelloSize);
 }
 
-void Device::sendHeartbeat() {
-  uint32_t now = clock_.millis();
+void Device::sendHeartbeat(uint16_t now) {
   uint8_t* p = tx_.payload();
-  uint32_t since = beatSent_ ? now - lastBeat_ : 0;
   ++beatCounter_;
   storeU16(p, beatCounter_);
-  storeU16(p + 2, (uint16_t)(since > 0xFFFF ? 0xFFFF : since));
+  storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastBeat_) : 0);
   storeU16(p + 4, rx_.counters.crc);
   storeU16(p + 6, rx_.counters.overflow);
   storeU16(p + 8, rx_.counters.dropped);

@@ -132,8 +132,10 @@ struct DeviceState {
   uint32_t seed_, nonce_, hubNonce_;
   bool started_, linked_, hubKnown_;
   uint8_t peerMax_;
-  uint16_t peerBeatMs_;
-  uint32_t lastRx_, lastBeat_, lastAnnounce_;
+  // Times are the low 16 bits of millis(): every interval here stays below 65 s, so differences
+  // are exact as long as update() runs at least that often.
+  uint16_t lostAfterMs_;  // the hub's heartbeat interval x HUBWIRE_LOST_AFTER_BEATS
+  uint16_t lastRx_, lastBeat_, lastAnnounce_;
   uint16_t beatCounter_;
   bool beatSent_;
   void (*onLinkUp_)();
@@ -153,7 +155,7 @@ struct DeviceState {
   QueuedEvent events_[HUBWIRE_EVENT_QUEUE];
   uint8_t eventHead_, eventCount_, eventSeq_;
   bool eventInFlight_;
-  uint32_t eventSentAt_;
+  uint16_t eventSentAt_;
 
   // Subscriptions (id 0 = free slot).
   // Times are the low 16 bits of millis(): intervals stay below 65 s, so differences are exact.
@@ -329,8 +331,9 @@ class Device : private DeviceState {
   void loseLink();
   void sendHello(bool reply);
   void drawNonce(uint32_t hubNonce);
-  void sendHeartbeat();
-  void sendEvent();
+  void sendHeartbeat(uint16_t now);
+  void sendEvent(uint16_t now);
+  uint16_t ms() { return (uint16_t)clock_.millis(); }
   void sendSamples();
   void sendNak(const Frame& f, uint8_t code);
   void reply(uint8_t type, const Frame& f, uint8_t len);
