@@ -11,25 +11,25 @@ const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst ar
 // ---------------------------------------------------------------- declarations
 
 void Device::addAccess(uint8_t a) {
-  if (!skip_) info_.access |= a;
+  if (!skip_) info_->access |= a;
 }
 void Device::setScalars(const void* a, const void* b, uint8_t size, ScalarOps ops) {
   if (skip_) return;
-  info_.ops = ops;
+  info_->ops = ops;
   if (b) {
-    memcpy(info_.min.b, a, size);
-    memcpy(info_.max.b, b, size);
-    info_.flags |= kHasRange;
+    memcpy(info_->min.b, a, size);
+    memcpy(info_->max.b, b, size);
+    info_->flags |= kHasRange;
   } else {
-    memcpy(info_.failsafe.b, a, size);
-    info_.flags |= kHasFailsafe;
+    memcpy(info_->failsafe.b, a, size);
+    info_->flags |= kHasFailsafe;
   }
 }
 void Device::setText(uint8_t which, Text t) {
-  if (!skip_) (which ? info_.description : info_.unit) = t;
+  if (!skip_) (which ? info_->description : info_->unit) = t;
 }
 void Device::setChange(void (*fn)()) {
-  if (!skip_) info_.fn = fn;
+  if (!skip_) info_->fn = fn;
 }
 
 Device::Device(ByteStream& stream, Clock& clock)
@@ -54,12 +54,12 @@ Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize,
     if (visitId_ == resumeFrom_) json_->seek(resumePos_);
   }
   if (!skip_) {
-    info_ = ChannelInfo();
-    info_.name = name;
-    info_.type = type;
-    info_.data = data;
-    info_.memSize = memSize;
-    info_.access = access;
+    *info_ = ChannelInfo();
+    info_->name = name;
+    info_->type = type;
+    info_->data = data;
+    info_->memSize = memSize;
+    info_->access = access;
   }
   pending_ = true;
   return *this;
@@ -68,14 +68,15 @@ Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize,
 Device& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk) {
   declare(name, nullptr, ValueType{arg, 0, Text(), nullptr}, scalarSize(arg), access);
   if (!skip_) {
-    info_.ret = ret;
-    info_.fn = fn;
-    info_.thunk = thunk;
+    info_->ret = ret;
+    info_->fn = fn;
+    info_->thunk = thunk;
   }
   return *this;
 }
 
-void Device::visit(Mode mode, uint8_t target) {
+void Device::visit(Mode mode, ChannelInfo& scratch, uint8_t target) {
+  info_ = &scratch;
   mode_ = mode;
   target_ = target;
   visitId_ = 0;
@@ -99,10 +100,10 @@ void Device::finishChannel() {
       describeChannel();
       break;
     case kFailsafe:
-      if ((info_.flags & kHasFailsafe) && info_.data) {
-        uint8_t n = info_.type.count ? info_.type.count : 1;
-        uint8_t size = scalarSize(info_.type.code);
-        for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_.data + i * size, info_.failsafe.b, size);
+      if ((info_->flags & kHasFailsafe) && info_->data) {
+        uint8_t n = info_->type.count ? info_->type.count : 1;
+        uint8_t size = scalarSize(info_->type.code);
+        for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_->data + i * size, info_->failsafe.b, size);
       }
       break;
     default:
@@ -110,9 +111,9 @@ void Device::finishChannel() {
   }
 }
 
-bool Device::find(uint8_t id) {
+bool Device::find(uint8_t id, ChannelInfo& ch) {
   if (id == 0 || id > channelCount_) return false;
-  visit(kFind, id);
+  visit(kFind, ch, id);
   return true;
 }
 
@@ -122,10 +123,10 @@ void Device::checkChannel() {
   if (error_ != kSetupOk) return;
   if (id > HUBWIRE_MAX_CHANNELS) {
     error_ = kSetupTooManyChannels;
-  } else if (info_.type.code == kStruct && info_.type.memSize() != info_.memSize) {
+  } else if (info_->type.code == kStruct && info_->type.memSize() != info_->memSize) {
     error_ = kSetupBadLayout;  // memSize() is 0 for a malformed layout
   } else {
-    if (info_.eventId) *info_.eventId = id;
+    if (info_->eventId) *info_->eventId = id;
     return;
   }
   errorChannel_ = id;
@@ -182,37 +183,37 @@ void Device::describeChannel() {
   j.key(HUBWIRE_TEXT("id"));
   j.uinteger(visitId_);
   j.key(HUBWIRE_TEXT("n"));
-  j.text(info_.name);
+  j.text(info_->name);
   j.key(HUBWIRE_TEXT("a"));
-  putAccess(j, info_.access);
+  putAccess(j, info_->access);
   j.key(HUBWIRE_TEXT("t"));
-  putType(j, info_.type.code);
-  if (info_.type.count) {
+  putType(j, info_->type.code);
+  if (info_->type.count) {
     j.key(HUBWIRE_TEXT("c"));
-    j.uinteger(info_.type.count);
+    j.uinteger(info_->type.count);
   }
-  if (info_.fields) info_.fields(j, info_.type);
-  if (info_.ret != kVoid) {
+  if (info_->fields) info_->fields(j, info_->type);
+  if (info_->ret != kVoid) {
     j.key(HUBWIRE_TEXT("rt"));
-    putType(j, info_.ret);
+    putType(j, info_->ret);
   }
-  if (!info_.unit.empty()) {
+  if (!info_->unit.empty()) {
     j.key(HUBWIRE_TEXT("u"));
-    j.text(info_.unit);
+    j.text(info_->unit);
   }
-  if (info_.flags & kHasRange) {
+  if (info_->flags & kHasRange) {
     j.key(HUBWIRE_TEXT("min"));
-    info_.ops(info_.min.b, nullptr, nullptr, &j);
+    info_->ops(info_->min.b, nullptr, nullptr, &j);
     j.key(HUBWIRE_TEXT("max"));
-    info_.ops(info_.max.b, nullptr, nullptr, &j);
+    info_->ops(info_->max.b, nullptr, nullptr, &j);
   }
-  if (info_.flags & kHasFailsafe) {
+  if (info_->flags & kHasFailsafe) {
     j.key(HUBWIRE_TEXT("fs"));
-    info_.ops(info_.failsafe.b, nullptr, nullptr, &j);
+    info_->ops(info_->failsafe.b, nullptr, nullptr, &j);
   }
-  if (!info_.description.empty()) {
+  if (!info_->description.empty()) {
     j.key(HUBWIRE_TEXT("d"));
-    j.text(info_.description);
+    j.text(info_->description);
   }
   j.put('}');
 }
@@ -234,7 +235,8 @@ uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
 
 void Device::describeAll(JsonWindow& j) {
   if (!resumeFrom_) describeHead(j);
-  visit(kDescribe);
+  ChannelInfo scratch;
+  visit(kDescribe, scratch);
   j.put(']');
   j.put('}');
 }
@@ -262,7 +264,10 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
   channelCount_ = 0;
   errorChannel_ = 0;
   error_ = declarations ? kSetupOk : kSetupNoDeclarations;
-  if (error_ == kSetupOk) visit(kCheck);
+  if (error_ == kSetupOk) {
+    ChannelInfo scratch;
+    visit(kCheck, scratch);
+  }
   if (error_ != kSetupOk) {
     started_ = false;
     return false;
@@ -412,7 +417,8 @@ void Device::newHubSession(uint32_t nonce) {
 
 void Device::loseLink() {
   linked_ = false;
-  visit(kFailsafe);
+  ChannelInfo scratch;
+  visit(kFailsafe, scratch);
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
 #endif
@@ -444,39 +450,41 @@ void Device::onChunk(const Frame& f) {
 }
 
 void Device::onRequest(const Frame& f) {
-  if (!find(f.id)) return sendNak(f, kErrUnknownChannel);
-  if (!(info_.access & kReadable)) return sendNak(f, kErrNotReadable);
+  ChannelInfo ch;
+  if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
+  if (!(info_->access & kReadable)) return sendNak(f, kErrNotReadable);
   if (f.len != 0) return sendNak(f, kErrBadLength);
-  reply(kMsgResponse, f, (uint8_t)info_.type.toWire(info_.data, tx_.payload()));
+  reply(kMsgResponse, f, (uint8_t)info_->type.toWire(info_->data, tx_.payload()));
 }
 
 void Device::onControl(const Frame& f) {
   uint8_t code = kOk;
   uint8_t type = kMsgAck, len = 0;
-  if (!find(f.id)) {
+  ChannelInfo ch;
+  if (!find(f.id, ch)) {
     code = kErrUnknownChannel;
-  } else if (!(info_.access & (kWritable | kCallable))) {
+  } else if (!(info_->access & (kWritable | kCallable))) {
     code = kErrNotWritable;
   } else {
-    const ValueType& t = info_.type;
+    const ValueType& t = info_->type;
     code = t.check(f.payload, f.len);
-    if (code == kOk && (info_.flags & kHasRange)) {
+    if (code == kOk && (info_->flags & kHasRange)) {
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
       for (uint8_t i = 0; i < n && code == kOk; ++i)
-        if (!info_.ops(f.payload + i * size, &info_.min, &info_.max, nullptr)) code = kErrOutOfRange;
+        if (!info_->ops(f.payload + i * size, &info_->min, &info_->max, nullptr)) code = kErrOutOfRange;
     }
     if (code == kOk) {
-      if (info_.thunk) {
+      if (info_->thunk) {
         uint8_t* ret = tx_.payload();
-        if (!info_.thunk(info_.fn, f.payload, ret)) {
+        if (!info_->thunk(info_->fn, f.payload, ret)) {
           code = kErrRejected;
-        } else if (info_.ret != kVoid) {
+        } else if (info_->ret != kVoid) {
           type = kMsgResponse;
-          len = scalarSize(info_.ret);
+          len = scalarSize(info_->ret);
         }
       } else {
-        t.fromWire(f.payload, f.len, info_.data);
-        if (info_.fn) info_.fn();
+        t.fromWire(f.payload, f.len, info_->data);
+        if (info_->fn) info_->fn();
       }
     }
   }
@@ -492,8 +500,9 @@ void Device::onControl(const Frame& f) {
 }
 
 void Device::onSubscribe(const Frame& f) {
-  if (!find(f.id)) return sendNak(f, kErrUnknownChannel);
-  if (!(info_.access & kStreamable)) return sendNak(f, kErrNotStreamable);
+  ChannelInfo ch;
+  if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
+  if (!(info_->access & kStreamable)) return sendNak(f, kErrNotStreamable);
   if (f.len != 2) return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
@@ -530,12 +539,13 @@ void Device::sendSamples() {
     if (!s.id) continue;
     uint16_t now = ms();
     if ((int16_t)(now - s.due) < 0) continue;
-    if (!find(s.id)) {
+    ChannelInfo ch;
+    if (!find(s.id, ch)) {
       s.id = 0;
       continue;
     }
     uint8_t* out = tx_.payload();
-    uint16_t len = info_.type.toWire(info_.data, out + kSampleHeader);
+    uint16_t len = info_->type.toWire(info_->data, out + kSampleHeader);
     if (stream_.writable() < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
     storeU16(out, s.first ? 0 : (uint16_t)(now - s.last));
     tx_.send(stream_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));

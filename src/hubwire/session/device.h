@@ -224,7 +224,7 @@ class Device : private DeviceState {
   Builder<NotNumeric> expose(Text name, T& var, Text layout) {
     static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
     declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
-    if (!skip_) info_.fields = &describeFields;  // referenced only here: no struct, no code
+    if (!skip_) info_->fields = &describeFields;  // referenced only here: no struct, no code
     return *this;
   }
 
@@ -267,7 +267,7 @@ class Device : private DeviceState {
     checkValue<T, sizeof(T)>();
     static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
     declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kEventAccess);
-    if (!skip_) info_.eventId = &ev.id;
+    if (!skip_) info_->eventId = &ev.id;
     return *this;
   }
 
@@ -310,8 +310,10 @@ class Device : private DeviceState {
   void setText(uint8_t which, Text t);  // 0 unit, 1 description
   void setChange(void (*fn)());
   void finishChannel();  // the visited channel is complete: act on it for the current mode
-  void visit(Mode mode, uint8_t target = 0);
-  bool find(uint8_t id);  // info_ describes channel id afterwards
+  // Runs the declarations with scratch as the channel being visited (scratch lives on the caller's
+  // stack: a channel's facts take RAM only while they are being used).
+  void visit(Mode mode, ChannelInfo& scratch, uint8_t target = 0);
+  bool find(uint8_t id, ChannelInfo& ch);  // ch describes channel id afterwards
   void describeChannel();
   static void describeFields(JsonWindow& j, const ValueType& t);
   uint16_t describe(uint16_t start, uint16_t len, uint8_t* out);  // copies a window of the JSON
@@ -387,7 +389,7 @@ class Device : private DeviceState {
   FrameReceiver rx_;
   FrameWriter tx_;
   Text name_, firmware_;
-  ChannelInfo info_;  // the channel being visited
+  ChannelInfo* info_;  // the channel being visited, during a visit
 };
 
 }  // namespace hubwire
