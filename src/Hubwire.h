@@ -34,24 +34,12 @@
 
 namespace hubwire {
 
-// Binds the core's seams to an Arduino Stream and millis().
-class ArduinoPorts : public ByteStream, public Clock {
+// The core's seam bound to an Arduino Stream and millis() (functions in HubwireArduino.cpp).
+class Port {
  public:
-  explicit ArduinoPorts(Stream& s) : stream_(s), reportsRoom_(false) {}
-  int read() override { return stream_.read(); }
-  void write(const uint8_t* data, size_t len) override { stream_.write(data, len); }
-  size_t writable() override {
-    int n = stream_.availableForWrite();
-    if (n > 0) reportsRoom_ = true;
-    // Some cores never implement availableForWrite() (always 0): then we cannot know, so go ahead.
-    return reportsRoom_ ? (size_t)n : (size_t)0xFFFF;
-  }
-  uint32_t millis() override { return ::millis(); }
-  uint32_t micros() override { return ::micros(); }
-
- protected:
-  Stream& stream_;
-  bool reportsRoom_;
+  explicit Port(Stream& s) : stream(s), reportsRoom(false) {}
+  Stream& stream;
+  bool reportsRoom;  // availableForWrite() has ever said something other than 0
 };
 
 // Seeds the session nonce: differs between resets (a counter that survives them) and, where the
@@ -60,10 +48,10 @@ uint32_t bootNonce();
 
 }  // namespace hubwire
 
-class Hubwire : private hubwire::ArduinoPorts, public hubwire::Device {
+class Hubwire : private hubwire::Port, public hubwire::Device {
  public:
   // Any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
-  explicit Hubwire(Stream& stream) : hubwire::ArduinoPorts(stream), hubwire::Device(*this, *this) {}
+  explicit Hubwire(Stream& stream) : hubwire::Port(stream), hubwire::Device(*static_cast<hubwire::Port*>(this)) {}
 
   // Checks the declarations and starts talking. false if a declaration is wrong: error() says why
   // and errorChannel() which channel (1 = the first declared).

@@ -1,7 +1,19 @@
-// The Arduino-only part of the library: where a per-boot nonce comes from.
+// The Arduino-only part of the library: the core's seam bound to a Stream and millis(), and where
+// a per-boot nonce comes from.
 #include "Hubwire.h"
 
 namespace hubwire {
+
+int portRead(Port& p) { return p.stream.read(); }
+void portWrite(Port& p, const uint8_t* data, size_t len) { p.stream.write(data, len); }
+size_t portWritable(Port& p) {
+  int n = p.stream.availableForWrite();
+  if (n > 0) p.reportsRoom = true;
+  // Some cores never implement availableForWrite() (always 0): then we cannot know, so go ahead.
+  return p.reportsRoom ? (size_t)n : (size_t)0xFFFF;
+}
+uint32_t portMillis(Port&) { return ::millis(); }
+uint32_t portMicros(Port&) { return ::micros(); }
 
 #if defined(__AVR__)
 // Survives a reset (not a power cycle, where RAM starts random anyway), so each boot differs.

@@ -1,5 +1,8 @@
-// The two seams through which the portable core reaches the outside world. The Arduino face binds
-// them to a Stream and millis(); tests bind them to fakes; the emulator binds them to a pty.
+// The seam through which the portable core reaches the outside world: a byte stream and a clock.
+// Each program links exactly one binding that defines class Port and the functions below: the
+// Arduino face binds them to a Stream and millis() (src/HubwireArduino.cpp), tests to fakes
+// (test/support), the fuzzer to its input. Plain functions bound at link time, not virtual ones:
+// AVR keeps vtables in RAM and pays an indirect call per byte.
 #ifndef HUBWIRE_PORT_H
 #define HUBWIRE_PORT_H
 
@@ -8,23 +11,18 @@
 
 namespace hubwire {
 
-class ByteStream {
- public:
-  // Next received byte, or -1 when none is waiting. Must not block.
-  virtual int read() = 0;
-  // Queue bytes for sending.
-  virtual void write(const uint8_t* data, size_t len) = 0;
-  // Bytes that can be written now without blocking; a large number when unknown.
-  virtual size_t writable() = 0;
-};
+class Port;  // defined by the binding
 
-class Clock {
- public:
-  // Milliseconds since some fixed point; wraps at 2^32.
-  virtual uint32_t millis() = 0;
-  // Microseconds, for entropy only (when the hub is first heard varies from boot to boot).
-  virtual uint32_t micros() { return millis() * 1000u; }
-};
+// Next received byte, or -1 when none is waiting. Must not block.
+int portRead(Port& port);
+// Queue bytes for sending.
+void portWrite(Port& port, const uint8_t* data, size_t len);
+// Bytes that can be written now without blocking; a large number when unknown.
+size_t portWritable(Port& port);
+// Milliseconds since some fixed point; wraps at 2^32.
+uint32_t portMillis(Port& port);
+// Microseconds, for entropy only (when the hub is first heard varies from boot to boot).
+uint32_t portMicros(Port& port);
 
 }  // namespace hubwire
 

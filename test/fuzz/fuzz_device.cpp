@@ -37,24 +37,23 @@ using namespace hubwire;
 
 namespace {
 
-class FuzzStream : public ByteStream {
+}  // namespace
+
+// The fuzzer's binding of the core's seam: input from the fuzz data, a clock it advances.
+class hubwire::Port {
  public:
-  int read() override {
-    if (pos >= in.size()) return -1;
-    return in[pos++];
-  }
-  void write(const uint8_t* data, size_t len) override { out.insert(out.end(), data, data + len); }
-  size_t writable() override { return room; }
   std::vector<uint8_t> in, out;
   size_t pos = 0;
   size_t room = 4096;
-};
-
-class FuzzClock : public Clock {
- public:
-  uint32_t millis() override { return now; }
   uint32_t now = 0;
 };
+int hubwire::portRead(Port& p) { return p.pos < p.in.size() ? p.in[p.pos++] : -1; }
+void hubwire::portWrite(Port& p, const uint8_t* data, size_t len) { p.out.insert(p.out.end(), data, data + len); }
+size_t hubwire::portWritable(Port& p) { return p.room; }
+uint32_t hubwire::portMillis(Port& p) { return p.now; }
+uint32_t hubwire::portMicros(Port& p) { return p.now * 1000u; }
+
+namespace {
 
 // channel variables
 bool vBool;
@@ -128,7 +127,7 @@ void resetState() {
   changes = calls = 0;
 }
 
-void checkOutput(FuzzStream& s) {
+void checkOutput(Port& s) {
   static uint8_t buf[HUBWIRE_RAW_FRAME_SIZE(255)];
   FrameReceiver rx(buf, sizeof(buf));
   for (uint8_t b : s.out) {
@@ -139,7 +138,7 @@ void checkOutput(FuzzStream& s) {
   s.out.clear();
 }
 
-void step(Device& d, FuzzStream& s) {
+void step(Device& d, Port& s) {
   d.update();
   CHECK(d.eventsQueued() <= HUBWIRE_EVENT_QUEUE);
   checkOutput(s);
@@ -150,11 +149,11 @@ void step(Device& d, FuzzStream& s) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   resetState();
-  FuzzStream s;
-  FuzzClock clock;
-  clock.now = 1000;
+  Port s;
+
+  s.now = 1000;
   s.room = (size_t)(data[0] >> 1) * 4;
-  Device d(s, clock);
+  Device d(s);
   dev = &d;
   bool ok = d.begin("fuzz", channels, "0.1", 0x12345678);
   CHECK(ok);
@@ -165,7 +164,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       s.in.push_back(data[i]);
       ++seg;
       if (data[i] == 0) {
-        clock.now += (uint32_t)(3 * seg);
+        s.now += (uint32_t)(3 * seg);
         seg = 0;
         // the device reads at most 128 bytes per update: drain what is there
         while (s.pos < s.in.size()) step(d, s);
@@ -193,7 +192,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       } else if (dt == 0xFE) {
         s.in.insert(s.in.end(), payload, payload + len);
       } else {
-        clock.now += (uint32_t)dt * 4;
+        s.now += (uint32_t)dt * 4;
         uint8_t wire[FrameWriter::wireSize(255) + 8];
         size_t n = encodeFrame(type, seq, id, payload, (uint8_t)len, wire);
         s.in.insert(s.in.end(), wire, wire + n);
@@ -203,7 +202,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
   for (int k = 0; k < 40; ++k) {  // let time run: retries, samples, link loss, announces
-    clock.now += 50;
+    s.now += 50;
     step(d, s);
   }
   dev = nullptr;

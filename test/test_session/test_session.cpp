@@ -90,7 +90,8 @@ class Session : public ::testing::Test {
  protected:
   FakeStream stream;
   FakeClock clock;
-  Device device{stream, clock};
+  Port port{stream, clock};
+  Device device{port};
   uint8_t seq = 0;
   std::vector<RxFrame> others;  // frames sent in the same update() as the last answer
   std::vector<RxFrame> linkFrames;
@@ -198,7 +199,8 @@ TEST(Nonce, DependsOnWhenTheHubIsFirstHeard) {
   for (int boot = 0; boot < 2; ++boot) {
     FakeStream s;
     FakeClock c;
-    Device d(s, c);
+    Port p(s, c);
+    Device d(p);
     dut = &d;
     ASSERT_TRUE(d.begin("tester", declarations, "2.1", 0x1234));  // same seed each boot
     c.now += 40;
@@ -220,7 +222,8 @@ TEST(Nonce, DependsOnTheHubsNonceInTheFirstHelloHeard) {
   for (int boot = 0; boot < 2; ++boot) {
     FakeStream s;
     FakeClock c;
-    Device d(s, c);
+    Port p(s, c);
+    Device d(p);
     dut = &d;
     ASSERT_TRUE(d.begin("tester", declarations, "2.1", 0x1234));
     c.us = 40000;  // identical timing
@@ -708,7 +711,8 @@ void tooMany() {
 TEST(Declarations, ErrorsAreReportedWithTheChannel) {
   FakeStream s;
   FakeClock c;
-  Device d(s, c);
+  Port p(s, c);
+  Device d(p);
   bad = &d;
   struct Case {
     void (*fn)();

@@ -94,7 +94,9 @@ TEST(Vectors, Cobs) {
     out.resize(cobsEncode(dec.data(), dec.size(), out.data()));
     EXPECT_EQ(hexOf(out), hexOf(enc)) << v["name"];
     FakeStream s;
-    cobsEncodeTo(dec.data(), dec.size(), s);
+    FakeClock c;
+    Port p(s, c);
+    cobsEncodeTo(dec.data(), dec.size(), p);
     EXPECT_EQ(hexOf(s.out), hexOf(enc)) << v["name"] << " (streamed)";
     Bytes back(dec.size() + 1);
     size_t n = 0;
@@ -173,7 +175,9 @@ TEST(Vectors, Frames) {
     FrameWriter w(buf, sizeof(buf));
     memcpy(w.payload(), payload.data(), payload.size());
     FakeStream s;
-    w.send(s, type, seq, id, (uint8_t)payload.size());
+    FakeClock c;
+    Port p(s, c);
+    w.send(p, type, seq, id, (uint8_t)payload.size());
     EXPECT_EQ(hexOf(s.out), v["wire"].get<std::string>()) << v["name"];
     EXPECT_LE(s.out.size(), FrameWriter::wireSize(payload.size()));
     Bytes whole(FrameWriter::wireSize(payload.size()));

@@ -32,10 +32,9 @@ void Device::setChange(void (*fn)()) {
   if (!skip_) info_->fn = fn;
 }
 
-Device::Device(ByteStream& stream, Clock& clock)
+Device::Device(Port& port)
     : DeviceState(),  // all zero
-      stream_(stream),
-      clock_(clock),
+      port_(port),
       rx_(rxBuf_, sizeof(rxBuf_)),
       tx_(txBuf_, sizeof(txBuf_)) {
   error_ = kSetupNoDeclarations;
@@ -294,7 +293,7 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
 // the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
 // connection even where a simulated or freshly powered board repeats everything else.
 void Device::drawNonce(uint32_t hubNonce) {
-  uint32_t parts[3] = {seed_, clock_.micros(), hubNonce};
+  uint32_t parts[3] = {seed_, portMicros(port_), hubNonce};
   const uint8_t* bytes = (const uint8_t*)parts;
   uint32_t h = kFnvOffset;
   for (uint8_t i = 0; i < sizeof(parts); ++i) h = fnv1a(h, bytes[i]);
@@ -304,7 +303,7 @@ void Device::drawNonce(uint32_t hubNonce) {
 void Device::update() {
   if (!started_) return;
   for (uint8_t i = 0; i < kMaxBytesPerUpdate; ++i) {
-    int c = stream_.read();
+    int c = portRead(port_);
     if (c < 0) break;
     if (rx_.feed((uint8_t)c)) handle(rx_.frame());
   }
@@ -546,9 +545,9 @@ void Device::sendSamples() {
     }
     uint8_t* out = tx_.payload();
     uint16_t len = info_->type.toWire(info_->data, out + kSampleHeader);
-    if (stream_.writable() < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
+    if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
     storeU16(out, s.first ? 0 : (uint16_t)(now - s.last));
-    tx_.send(stream_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));
+    tx_.send(port_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));
     s.first = false;
     s.last = now;
     // Keep the schedule (no drift), unless we fell more than one interval behind.
@@ -574,7 +573,7 @@ void Device::sendEvent(uint16_t now) {
     eventInFlight_ = true;
   }
   memcpy(tx_.payload(), e.data, e.len);
-  tx_.send(stream_, kMsgEvent, eventSeq_, e.id, e.len);
+  tx_.send(port_, kMsgEvent, eventSeq_, e.id, e.len);
   eventSentAt_ = now;
 }
 
@@ -588,7 +587,7 @@ void Device::sendHello(bool isReply) {
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
   storeU32(p + 10, descHash_);
   storeU16(p + 14, descLength_);
-  tx_.send(stream_, kMsgHello, 0, 0, kHelloSize);
+  tx_.send(port_, kMsgHello, 0, 0, kHelloSize);
 }
 
 void Device::sendHeartbeat(uint16_t now) {
@@ -599,7 +598,7 @@ void Device::sendHeartbeat(uint16_t now) {
   storeU16(p + 4, rx_.counters.crc);
   storeU16(p + 6, rx_.counters.overflow);
   storeU16(p + 8, rx_.counters.dropped);
-  tx_.send(stream_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
+  tx_.send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
   lastBeat_ = now;
   beatSent_ = true;
 }
@@ -609,6 +608,6 @@ void Device::sendNak(const Frame& f, uint8_t code) {
   reply(kMsgNak, f, 1);
 }
 
-void Device::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(stream_, type, f.seq, f.id, len); }
+void Device::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(port_, type, f.seq, f.id, len); }
 
 }  // namespace hubwire

@@ -1,5 +1,5 @@
 // The device side of a Hubwire session: handshake, heartbeats, descriptor, requests, controls,
-// events and streams (docs/PROTOCOL.md 3-4), over the ByteStream and Clock seams.
+// events and streams (docs/PROTOCOL.md 3-4), over the Port seam (port.h).
 //
 // Channels are declared in a function of the sketch ("declarations"), which the device runs again
 // whenever it needs a channel's facts (to describe it, to find channel 3, to apply failsafes).
@@ -196,7 +196,7 @@ class Device : private DeviceState {
     Device& dev_;
   };
 
-  Device(ByteStream& stream, Clock& clock);
+  explicit Device(Port& port);
 
   // ---- declarations: call these only inside the function given to begin() ----
   // A declaration the library cannot carry fails to compile, saying why.
@@ -335,7 +335,7 @@ class Device : private DeviceState {
   void drawNonce(uint32_t hubNonce);
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
-  uint16_t ms() { return (uint16_t)clock_.millis(); }
+  uint16_t ms() { return (uint16_t)portMillis(port_); }
   void sendSamples();
   void sendNak(const Frame& f, uint8_t code);
   void reply(uint8_t type, const Frame& f, uint8_t len);
@@ -384,8 +384,7 @@ class Device : private DeviceState {
     return true;
   }
 
-  ByteStream& stream_;
-  Clock& clock_;
+  Port& port_;
   FrameReceiver rx_;
   FrameWriter tx_;
   Text name_, firmware_;

@@ -16,7 +16,7 @@ inline size_t cobsMaxEncoded(size_t n) { return n + n / 254 + 1; }
 size_t cobsEncode(const uint8_t* in, size_t n, uint8_t* out);
 
 // Encodes n bytes straight to a stream, block by block, without a second buffer.
-void cobsEncodeTo(const uint8_t* in, size_t n, ByteStream& out);
+void cobsEncodeTo(const uint8_t* in, size_t n, Port& out);
 
 // Decodes an encoded block (no delimiter) into out; false when malformed or longer than cap.
 bool cobsDecode(const uint8_t* in, size_t n, uint8_t* out, size_t cap, size_t* outLen);

@@ -65,7 +65,7 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
   return false;
 }
 
-void FrameWriter::send(ByteStream& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
+void FrameWriter::send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
   buf_[0] = type;
   buf_[1] = seq;
   buf_[2] = id;
@@ -73,7 +73,7 @@ void FrameWriter::send(ByteStream& out, uint8_t type, uint8_t seq, uint8_t id, u
   storeU16(buf_ + n, crc16(buf_, n));
   cobsEncodeTo(buf_, n + 2u, out);
   uint8_t delimiter = 0;
-  out.write(&delimiter, 1);
+  portWrite(out, &delimiter, 1);
 }
 
 size_t encodeFrame(uint8_t type, uint8_t seq, uint8_t id, const uint8_t* payload, uint8_t len, uint8_t* out) {

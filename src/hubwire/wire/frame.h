@@ -77,7 +77,7 @@ class FrameWriter {
   // Wire bytes a frame with this payload length takes at most (COBS code bytes and delimiter).
   static size_t wireSize(size_t len) { return len + kFrameOverhead + (len + kFrameOverhead) / 254 + 2; }
   // Adds header and CRC to the len payload bytes already in payload(), and sends the frame.
-  void send(ByteStream& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
+  void send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
 
  private:
   uint8_t* buf_;

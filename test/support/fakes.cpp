@@ -1,0 +1,12 @@
+// The tests' binding of the core's seam (src/hubwire/port.h) to FakeStream and FakeClock.
+#include "fakes.h"
+
+namespace hubwire {
+
+int portRead(Port& p) { return p.stream.read(); }
+void portWrite(Port& p, const uint8_t* data, size_t len) { p.stream.write(data, len); }
+size_t portWritable(Port& p) { return p.stream.room; }
+uint32_t portMillis(Port& p) { return p.clock.now; }
+uint32_t portMicros(Port& p) { return p.clock.micros(); }
+
+}  // namespace hubwire
