@@ -50,10 +50,10 @@ REGIONS = {
     21: ("part: crc16() over the 4 raw bytes of `C led=1`", None),
     22: ("part: FrameReceiver::feed() x 39 bytes (32 B payload)", None),
     23: ("part: crc16() over 35 bytes", None),
-    24: ("part: 8 x ArduinoPorts::read() -> Stream::read() (the read update() does)", None),
+    24: ("part: 8 x portRead() -> Stream::read() (the read update() does)", None),
     25: ("part: 8 x Stream::read() on the stub stream alone", None),
-    26: ("part: FrameWriter::send() of an empty ACK through ArduinoPorts", None),
-    29: ("part: FrameWriter::send() of a 4 B `r` through ArduinoPorts", None),
+    26: ("part: FrameWriter::send() of an empty ACK through the port", None),
+    29: ("part: FrameWriter::send() of a 4 B `r` through the port", None),
     27: ("part: one full replay of the 12 declarations (channels())", None),
     30: ("UART: 100 bytes out at Serial.begin(115200), until TX complete", None),
     31: ("UART: 100 bytes out at Serial.begin(1000000), until TX complete", None),
@@ -129,7 +129,7 @@ def run() -> None:
 
     breakdown = md_table(["part of `C led=1` (8 wire bytes)", "cycles", "share", "measured by"], [
         ["update() fixed cost (millis(), timers, stream slots)", f"{c[5]:,.0f}", f"{c[5] / ctl:.0%}", "region 5"],
-        ["reading 8 bytes: ArduinoPorts::read() -> Stream::read() (virtual twice)", f"{c[24]:,.0f}",
+        ["reading 8 bytes: portRead() -> Stream::read() (one virtual call)", f"{c[24]:,.0f}",
          f"{c[24] / ctl:.0%}", "region 24 (stub stream alone: region 25)"],
         ["FrameReceiver::feed() x 8: COBS, checks and the CRC", f"{c[20]:,.0f}", f"{c[20] / ctl:.0%}",
          f"region 20 (CRC alone {c[21]:,.0f}: region 21)"],
@@ -150,7 +150,7 @@ the marks. Repeated regions (3 runs, new seq each) gave counts {steady}. 16 MHz:
 Derived:
 
 - **receive path per wire byte** (slope between the 17- and 39-byte heartbeats, nothing dispatched):
-  **{slope:.0f} cycles/byte**; of that, per byte: reading through `ArduinoPorts` -> `Stream`
+  **{slope:.0f} cycles/byte**; of that, per byte: reading through `portRead()` -> `Stream`
   {read_per_byte:.0f} (the stub stream's own `read()` plus the loop: {stub_per_byte:.0f}), `FrameReceiver::feed()`
   {feed_slope:.0f} (COBS bookkeeping + the CRC at the delimiter; `crc16()` alone: {crc_per_byte:.1f}/byte),
   the rest is `update()`'s loop.
@@ -183,7 +183,7 @@ are therefore slightly pessimistic.
     rows = [
         row("2a. AVR receive path, cycles per wire byte (read + COBS + CRC, nothing dispatched)",
             f"<= {TARGET} c/B", f"{slope:.0f} c/B", slope <= TARGET, "python bench/rx_cycles.py",
-            f"read via 2 virtual calls {read_per_byte:.0f} c/B + FrameReceiver::feed {feed_slope:.0f} c/B "
+            f"read via portRead() -> Stream::read() {read_per_byte:.0f} c/B + FrameReceiver::feed {feed_slope:.0f} c/B "
             f"(CRC {crc_per_byte:.0f} of it)"),
         row("2b. AVR cost of an 8-byte control frame incl. ACK (`C led=1`)", f"<= {TARGET} c/B = {TARGET * 8} cycles",
             f"{ctl:,.0f} cycles = {ctl / 8:,.0f} c/B ({ctl / F_CPU * 1e6:,.0f} us)", per_byte_ok,

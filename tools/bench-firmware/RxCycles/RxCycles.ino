@@ -219,12 +219,12 @@ void setup() {
     (void)sink;
   }
   {
-    hubwire::ArduinoPorts ports(feed);  // the same double-virtual read hub.update() does
+    hubwire::Port ports(feed);  // the same read hub.update() does: portRead() -> Stream::read()
     encode('C', 78, 6, on, 1);
     feed.load(wire, wireLen);
     static volatile int last;
-    markStart(24);  // 24: reading the 8 bytes through ArduinoPorts::read() -> Stream::read()
-    for (uint8_t i = 0; i < 8; ++i) last = ports.read();
+    markStart(24);  // 24: reading the 8 bytes through portRead() -> Stream::read()
+    for (uint8_t i = 0; i < 8; ++i) last = hubwire::portRead(ports);
     markEnd(24);
     markStart(25);  // 25: reading 8 bytes from the stub stream alone
     for (uint8_t i = 0; i < 8; ++i) last = feed.read();
@@ -234,7 +234,7 @@ void setup() {
   {
     static uint8_t txbuf[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
     hubwire::FrameWriter tx(txbuf, sizeof(txbuf));
-    hubwire::ArduinoPorts sink(feed);  // the device's own write path, minus the UART
+    hubwire::Port sink(feed);  // the device's own write path, minus the UART
     markStart(26);  // 26: FrameWriter::send() of an empty ACK (CRC + COBS + writes)
     tx.send(sink, 0x07, 12, 6, 0);
     markEnd(26);
