@@ -14,7 +14,7 @@
 // are scalars, so this is all their buffers ever need.
 #define HUBWIRE_LARGEST_SCALAR (HUBWIRE_HAS_F64 ? 8 : 4)
 
-// Largest payload the device accepts and sends (bytes). Sets both frame buffers: 2 x (5 + this).
+// Largest payload the device accepts and sends (bytes). Sets the frame buffer: 5 + this.
 #ifndef HUBWIRE_MAX_PAYLOAD
 #define HUBWIRE_MAX_PAYLOAD 32
 #endif

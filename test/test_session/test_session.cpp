@@ -556,6 +556,43 @@ TEST_F(Session, LinkLossTimeoutFollowsTheHubsHeartbeat) {
 
 // Device times are 16-bit milliseconds: a slow hub's timeout is capped just below 65.5 s, and
 // still measured exactly across the 16-bit wrap of millis().
+// One buffer receives and sends: a frame of our own (here a heartbeat) waits while a hub frame is
+// half received, and both arrive intact.
+TEST_F(Session, OwnFramesWaitForAFrameStillArriving) {
+  link();
+  speed = 0.25f;
+  uint8_t wire[64];
+  size_t n = encodeFrame('R', 41, kSpeed, nullptr, 0, wire);
+  stream.in.insert(stream.in.end(), wire, wire + 3);
+  EXPECT_TRUE(pump(HUBWIRE_HEARTBEAT_MS).empty());  // a heartbeat is due, but the buffer is in use
+  stream.in.insert(stream.in.end(), wire + 3, wire + n);
+  auto sent = pump(1);
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].type, 'r');
+  EXPECT_EQ(sent[0].seq, 41);
+  EXPECT_EQ(sent[0].payload, le<float>(0.25f));
+  EXPECT_EQ(sent[1].type, 'H');
+  EXPECT_EQ(device.counters().dropped, 0);
+}
+
+// A frame whose sender stops halfway does not silence the device: after 50 ms it is dropped,
+// counted, and the device's own frames flow again.
+TEST_F(Session, AStalledFrameIsDroppedAndCounted) {
+  link();
+  uint8_t wire[64];
+  size_t n = encodeFrame('R', 42, kSpeed, nullptr, 0, wire);
+  stream.in.insert(stream.in.end(), wire, wire + 3);
+  EXPECT_TRUE(pump(HUBWIRE_HEARTBEAT_MS).empty());
+  EXPECT_TRUE(pump(49).empty());  // 49 ms after its last byte: still waiting
+  auto sent = pump(1);
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].type, 'H');
+  EXPECT_EQ(device.counters().dropped, 1);
+  stream.in.insert(stream.in.end(), wire + 3, wire + n);  // the rest arrives late: not a frame
+  EXPECT_TRUE(pump().empty());
+  EXPECT_EQ(transact('R', kSpeed).type, 'r');  // and the next request is answered
+}
+
 TEST_F(Session, SlowHubHeartbeatIsCappedBelowTheSixteenBitClock) {
   clock.now = 0xFFFF0000u - 5;
   drain(stream);

@@ -172,7 +172,7 @@ TEST(Vectors, Frames) {
     uint8_t type = v["type"], seq = v["seq"], id = v["id"];
     // Built with the device's writer, byte for byte.
     uint8_t buf[HUBWIRE_RAW_FRAME_SIZE(255)];
-    FrameWriter w(buf, sizeof(buf));
+    FrameWriter w(buf);
     memcpy(w.payload(), payload.data(), payload.size());
     FakeStream s;
     FakeClock c;

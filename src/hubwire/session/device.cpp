@@ -6,6 +6,7 @@ namespace hubwire {
 
 namespace {
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
+const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: the sender stopped
 }  // namespace
 
 // ---------------------------------------------------------------- declarations
@@ -35,8 +36,8 @@ void Device::setChange(void (*fn)()) {
 Device::Device(Port& port)
     : DeviceState(),  // all zero
       port_(port),
-      rx_(rxBuf_, sizeof(rxBuf_)),
-      tx_(txBuf_, sizeof(txBuf_)) {
+      rx_(frameBuf_, sizeof(frameBuf_)),
+      tx_(frameBuf_) {
   error_ = kSetupNoDeclarations;
   peerMax_ = HUBWIRE_MAX_PAYLOAD;
   lostAfterMs_ = HUBWIRE_HEARTBEAT_MS * HUBWIRE_LOST_AFTER_BEATS;
@@ -173,8 +174,7 @@ void Device::describeFields(JsonWindow& j, const ValueType& t) {
 void Device::describeChannel() {
   JsonWindow& j = *json_;
   if (!j.done()) {  // the last channel starting inside the window: the next chunk resumes here
-    resumeCandidate_ = visitId_;
-    resumeCandidatePos_ = j.length();
+    j.mark(visitId_);
   }
   if (visitId_ > 1) j.put(',');
   j.put('{');
@@ -222,12 +222,12 @@ uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
   json_ = &j;
   // Resume at the channel the previous chunk ended in, when this chunk starts after it.
   resumeFrom_ = (out && resumeId_ && start >= resumePos_) ? resumeId_ : 0;
-  resumeCandidate_ = 0;
+
   describeAll(j);
   json_ = nullptr;
-  if (out && resumeCandidate_) {
-    resumeId_ = resumeCandidate_;
-    resumePos_ = resumeCandidatePos_;
+  if (out && j.markId()) {
+    resumeId_ = j.markId();
+    resumePos_ = j.markPos();
   }
   return j.length();
 }
@@ -281,11 +281,11 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
     descHash_ = whole.hash();
   }
   resumeId_ = 0;
-  seed_ = seed;
-  nonce_ = 0;
+  nonce_ = seed;  // until drawNonce() mixes in the moment the hub is first heard
+  nonceDrawn_ = false;
   started_ = true;
   linked_ = false;
-  lastAnnounce_ = ms();  // the first announcement follows one interval after boot
+  lastSent_ = ms();  // the first announcement follows one interval after boot
   return true;
 }
 
@@ -293,33 +293,41 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
 // the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
 // connection even where a simulated or freshly powered board repeats everything else.
 void Device::drawNonce(uint32_t hubNonce) {
-  uint32_t parts[3] = {seed_, portMicros(port_), hubNonce};
+  uint32_t parts[3] = {nonce_, portMicros(port_), hubNonce};
   const uint8_t* bytes = (const uint8_t*)parts;
   uint32_t h = kFnvOffset;
   for (uint8_t i = 0; i < sizeof(parts); ++i) h = fnv1a(h, bytes[i]);
   nonce_ = h ? h : 1;  // never 0: the protocol reserves it
+  nonceDrawn_ = true;
 }
 
 void Device::update() {
   if (!started_) return;
-  for (uint8_t i = 0; i < kMaxBytesPerUpdate; ++i) {
+  uint8_t i = 0;
+  for (; i < kMaxBytesPerUpdate; ++i) {
     int c = portRead(port_);
     if (c < 0) break;
     if (rx_.feed((uint8_t)c)) handle(rx_.frame());
   }
   uint16_t now = ms();
+  if (i) lastByte_ = now;
+  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) loseLink();
+  // Frames are received and sent in one buffer. Answers are sent while no frame is arriving; a
+  // frame of our own waits for one that is half here, unless that one has stalled (a hub that
+  // died mid-frame), which is then dropped and counted.
+  if (!rx_.idle()) {
+    if ((uint16_t)(now - lastByte_) < kStalledFrameMs) return;
+    rx_.reset();
+    ++rx_.counters.dropped;
+  }
   if (!linked_) {
-    if ((uint16_t)(now - lastAnnounce_) >= HUBWIRE_ANNOUNCE_MS) {
-      lastAnnounce_ = now;
+    if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
+      lastSent_ = now;
       sendHello(false);
     }
     return;
   }
-  if ((uint16_t)(now - lastRx_) >= lostAfterMs_) {
-    loseLink();
-    return;
-  }
-  if (!beatSent_ || (uint16_t)(now - lastBeat_) >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat(now);
+  if (!beatSent_ || (uint16_t)(now - lastSent_) >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat(now);
   if (eventCount_ && (!eventInFlight_ || (uint16_t)(now - eventSentAt_) >= HUBWIRE_EVENT_RETRY_MS)) sendEvent(now);
   sendSamples();
 }
@@ -384,16 +392,18 @@ void Device::onHello(const Frame& f) {
     sendNak(f, kErrBadLength);
     return;
   }
+  // Everything is read before the answer is written: it is built in the same buffer.
   const uint8_t* p = f.payload;
-  if (!nonce_) drawNonce(loadU32(p + 2));
-  if (!(p[1] & kHelloReply)) sendHello(true);
-  if (p[0] != kProtocolVersion || (p[1] & kHelloDevice)) return;  // the hub reports the mismatch
+  uint8_t version = p[0], flags = p[1];
   uint32_t nonce = loadU32(p + 2);
+  uint16_t max = loadU16(p + 6);
+  uint16_t beat = loadU16(p + 8);
+  if (!nonceDrawn_) drawNonce(nonce);
+  if (!(flags & kHelloReply)) sendHello(true);
+  if (version != kProtocolVersion || (flags & kHelloDevice)) return;  // the hub reports the mismatch
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
   // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap.
-  uint16_t max = loadU16(p + 6);
   peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
-  uint16_t beat = loadU16(p + 8);
   // Times are 16-bit milliseconds: the timeout must stay below 65.5 s.
   const uint16_t kMaxBeat = 65535u / HUBWIRE_LOST_AFTER_BEATS;
   lostAfterMs_ = (uint16_t)((beat < 10 ? 10 : beat > kMaxBeat ? kMaxBeat : beat) * HUBWIRE_LOST_AFTER_BEATS);
@@ -421,7 +431,7 @@ void Device::loseLink() {
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
 #endif
-  lastAnnounce_ = ms();
+  lastSent_ = ms();
   if (onLinkLost_) onLinkLost_();
 }
 
@@ -521,8 +531,7 @@ void Device::onSubscribe(const Frame& f) {
     if (interval < HUBWIRE_MIN_STREAM_INTERVAL_MS) interval = HUBWIRE_MIN_STREAM_INTERVAL_MS;
     slot->id = f.id;
     slot->interval = interval;
-    slot->due = ms();
-    slot->first = true;
+    slot->due = slot->last = ms();  // the first sample is due now, and reports the time since
   }
 #else
   if (interval != 0) return sendNak(f, kErrBusy);
@@ -546,9 +555,8 @@ void Device::sendSamples() {
     uint8_t* out = tx_.payload();
     uint16_t len = info_->type.toWire(info_->data, out + kSampleHeader);
     if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
-    storeU16(out, s.first ? 0 : (uint16_t)(now - s.last));
+    storeU16(out, (uint16_t)(now - s.last));
     tx_.send(port_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));
-    s.first = false;
     s.last = now;
     // Keep the schedule (no drift), unless we fell more than one interval behind.
     s.due = (uint16_t)(s.due + s.interval);
@@ -578,7 +586,7 @@ void Device::sendEvent(uint16_t now) {
 }
 
 void Device::sendHello(bool isReply) {
-  if (!nonce_) drawNonce(0);
+  if (!nonceDrawn_) drawNonce(0);
   uint8_t* p = tx_.payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
@@ -594,12 +602,12 @@ void Device::sendHeartbeat(uint16_t now) {
   uint8_t* p = tx_.payload();
   ++beatCounter_;
   storeU16(p, beatCounter_);
-  storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastBeat_) : 0);
+  storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastSent_) : 0);
   storeU16(p + 4, rx_.counters.crc);
   storeU16(p + 6, rx_.counters.overflow);
   storeU16(p + 8, rx_.counters.dropped);
   tx_.send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
-  lastBeat_ = now;
+  lastSent_ = now;
   beatSent_ = true;
 }
 

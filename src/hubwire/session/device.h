@@ -107,16 +107,27 @@ struct ChannelInfo {
 struct DeviceState {
   enum Mode : uint8_t { kIdle, kCheck, kFind, kDescribe, kFailsafe };
 
-  uint8_t rxBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
-  uint8_t txBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+  // Flags, one bit each (SRAM is the Uno's scarcest resource).
+  bool skip_ : 1;           // visit: this declaration is not the one being built
+  bool pending_ : 1;        // visit: a visited channel awaits finishChannel()
+  bool nonceDrawn_ : 1;     // nonce_ is this boot's nonce (not yet: it holds the seed)
+  bool started_ : 1;        // begin() succeeded
+  bool linked_ : 1;
+  bool hubKnown_ : 1;       // hubNonce_ is valid
+  bool beatSent_ : 1;       // a heartbeat went out since the link came up
+  bool lastTxnValid_ : 1;   // duplicate suppression: lastTxn* describe a transaction
+  bool lastTxnControl_ : 1;  // ... which was a control
+  bool eventInFlight_ : 1;  // the head event was sent and awaits its ACK
+
+  // One buffer receives and sends frames: an answer is built where its question was (handlers
+  // read the question first), and frames of our own wait until no frame is arriving.
+  uint8_t frameBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
 
   // Declarations and the visit in progress.
   void (*declarations_)();
   Mode mode_;
   uint8_t visitId_;   // id of the channel being visited (1-based, 0 before the first)
   uint8_t target_;    // kFind: wanted id
-  bool skip_;         // kFind: target already found; ignore the remaining declarations
-  bool pending_;      // a visited channel awaits finishChannel()
   JsonWindow* json_;  // kDescribe
   uint8_t channelCount_;
   SetupError error_;
@@ -125,24 +136,23 @@ struct DeviceState {
   uint32_t descHash_;
   // Where a channel's JSON starts, from the last chunk served: the next chunk resumes there
   // instead of producing the descriptor from its first character again.
-  uint8_t resumeId_, resumeCandidate_, resumeFrom_;
-  uint16_t resumePos_, resumeCandidatePos_;
+  uint8_t resumeId_, resumeFrom_;
+  uint16_t resumePos_;
 
   // Session.
-  uint32_t seed_, nonce_, hubNonce_;
-  bool started_, linked_, hubKnown_;
+  uint32_t nonce_, hubNonce_;  // nonce_ holds begin()'s seed until it is drawn
   uint8_t peerMax_;
   // Times are the low 16 bits of millis(): every interval here stays below 65 s, so differences
   // are exact as long as update() runs at least that often.
   uint16_t lostAfterMs_;  // the hub's heartbeat interval x HUBWIRE_LOST_AFTER_BEATS
-  uint16_t lastRx_, lastBeat_, lastAnnounce_;
+  uint16_t lastRx_;
+  uint16_t lastSent_;  // the last heartbeat while linked, the last announcement while not
+  uint16_t lastByte_;  // when a byte last arrived
   uint16_t beatCounter_;
-  bool beatSent_;
   void (*onLinkUp_)();
   void (*onLinkLost_)();
 
   // Duplicate suppression: the last hub transaction and, for a control, the answer it got.
-  bool lastTxnValid_, lastTxnControl_;
   uint8_t lastTxnSeq_, lastTxnId_;
   uint8_t replyType_, replyLen_;
   uint8_t replyData_[HUBWIRE_MAX_RETURN];
@@ -154,15 +164,13 @@ struct DeviceState {
   };
   QueuedEvent events_[HUBWIRE_EVENT_QUEUE];
   uint8_t eventHead_, eventCount_, eventSeq_;
-  bool eventInFlight_;
   uint16_t eventSentAt_;
 
   // Subscriptions (id 0 = free slot).
   // Times are the low 16 bits of millis(): intervals stay below 65 s, so differences are exact.
   struct Subscription {
     uint8_t id, seq;
-    uint16_t interval, due, last;
-    bool first;
+    uint16_t interval, due, last;  // last: the previous sample, or the subscription
   };
 #if HUBWIRE_MAX_STREAMS > 0
   Subscription streams_[HUBWIRE_MAX_STREAMS];
@@ -293,7 +301,7 @@ class Device : private DeviceState {
 
   bool linked() const { return linked_; }
   // This boot's session nonce; 0 until the hub is first heard or the first announcement.
-  uint32_t nonce() const { return nonce_; }
+  uint32_t nonce() const { return nonceDrawn_ ? nonce_ : 0; }
   SetupError error() const { return error_; }
   uint8_t errorChannel() const { return errorChannel_; }
   uint8_t channelCount() const { return channelCount_; }

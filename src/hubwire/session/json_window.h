@@ -29,6 +29,13 @@ class JsonWindow {
   // Continue counting from pos (resuming after characters produced by an earlier pass).
   void seek(uint16_t pos) { pos_ = pos; }
   uint32_t hash() const { return hash_; }
+  // Remembers the last id marked while inside the window, and where it was (0: none yet).
+  void mark(uint8_t id) {
+    markId_ = id;
+    markPos_ = pos_;
+  }
+  uint8_t markId() const { return markId_; }
+  uint16_t markPos() const { return markPos_; }
   void comma() { needComma_ = true; }
   void noComma() { needComma_ = false; }
 
@@ -38,6 +45,8 @@ class JsonWindow {
   uint16_t pos_;
   uint32_t hash_;
   bool needComma_ = false;
+  uint8_t markId_ = 0;
+  uint16_t markPos_ = 0;
 };
 
 }  // namespace hubwire

@@ -35,11 +35,7 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
       ++counters.crc;
       return false;
     }
-    frame_.type = buf_[0];
-    frame_.seq = buf_[1];
-    frame_.id = buf_[2];
-    frame_.len = (uint8_t)(len - kFrameOverhead);
-    frame_.payload = buf_ + kFrameHeader;
+    frameLen_ = (uint8_t)(len - kFrameOverhead);
     return true;
   }
   started_ = true;

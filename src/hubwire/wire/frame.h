@@ -48,9 +48,13 @@ class FrameReceiver {
     }
     return feedSlow(byte);
   }
-  const Frame& frame() const { return frame_; }
+  // The frame, by value: its header is copied out, so an answer built in the same buffer cannot
+  // change it. The payload stays in the buffer.
+  Frame frame() const { return Frame{buf_[0], buf_[1], buf_[2], frameLen_, buf_ + kFrameHeader}; }
   // Forget any partial frame (the next byte starts a new one).
   void reset();
+  // No frame is partly received: the buffer holds nothing that is still needed.
+  bool idle() const { return !started_; }
 
   LinkCounters counters;
 
@@ -64,16 +68,16 @@ class FrameReceiver {
   bool pendingZero_;     // the current block ends with an implied zero (code < 0xFF)
   bool overflow_;
   bool started_;         // any byte since the last delimiter
-  Frame frame_;
+  uint8_t frameLen_;     // payload length of the last completed frame
 };
 
 // Builds frames in a fixed buffer and writes them COBS-encoded to a stream.
 class FrameWriter {
  public:
-  FrameWriter(uint8_t* buffer, uint16_t capacity) : buf_(buffer), cap_(capacity) {}
-  // Where the payload goes; room for maxPayload() bytes.
+  // buffer: HUBWIRE_RAW_FRAME_SIZE(largest payload sent) bytes.
+  explicit FrameWriter(uint8_t* buffer) : buf_(buffer) {}
+  // Where the payload goes.
   uint8_t* payload() { return buf_ + kFrameHeader; }
-  uint16_t maxPayload() const { return (uint16_t)(cap_ - kFrameOverhead); }
   // Wire bytes a frame with this payload length takes at most (COBS code bytes and delimiter).
   static size_t wireSize(size_t len) { return len + kFrameOverhead + (len + kFrameOverhead) / 254 + 2; }
   // Adds header and CRC to the len payload bytes already in payload(), and sends the frame.
@@ -81,7 +85,6 @@ class FrameWriter {
 
  private:
   uint8_t* buf_;
-  uint16_t cap_;
 };
 
 // Encodes a whole frame into out (room for FrameWriter::wireSize(len)); returns bytes written,

@@ -233,7 +233,7 @@ void setup() {
   }
   {
     static uint8_t txbuf[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
-    hubwire::FrameWriter tx(txbuf, sizeof(txbuf));
+    hubwire::FrameWriter tx(txbuf);
     hubwire::Port sink(feed);  // the device's own write path, minus the UART
     markStart(26);  // 26: FrameWriter::send() of an empty ACK (CRC + COBS + writes)
     tx.send(sink, 0x07, 12, 6, 0);
