@@ -14,17 +14,18 @@ const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: th
 void Device::addAccess(uint8_t a) {
   if (!skip_) info_->access |= a;
 }
-void Device::setScalars(const void* a, const void* b, uint8_t size, ScalarOps ops) {
+void Device::setRange(ScalarBits min, ScalarBits max, ScalarOps ops) {
   if (skip_) return;
   info_->ops = ops;
-  if (b) {
-    memcpy(info_->min.b, a, size);
-    memcpy(info_->max.b, b, size);
-    info_->flags |= kHasRange;
-  } else {
-    memcpy(info_->failsafe.b, a, size);
-    info_->flags |= kHasFailsafe;
-  }
+  info_->min = min;
+  info_->max = max;
+  info_->flags |= kHasRange;
+}
+void Device::setFailsafe(ScalarBits value, ScalarOps ops) {
+  if (skip_) return;
+  info_->ops = ops;
+  info_->failsafe = value;
+  info_->flags |= kHasFailsafe;
 }
 void Device::setText(uint8_t which, Text t) {
   if (!skip_) (which ? info_->description : info_->unit) = t;
@@ -43,7 +44,9 @@ Device::Device(Port& port)
   lostAfterMs_ = HUBWIRE_HEARTBEAT_MS * HUBWIRE_LOST_AFTER_BEATS;
 }
 
-Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access) {
+// Few, small arguments: AVR passes up to 18 bytes in registers and the rest on the stack, at a cost
+// in every declaration of every sketch.
+Device& Device::declare(Text name, void* data, TypeCode code, uint8_t count, uint16_t memSize, uint8_t access) {
   if (pending_) finishChannel();
   ++visitId_;
   // Build only the channels this visit needs: one for a find, those in the window for a chunk.
@@ -54,9 +57,10 @@ Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize,
     if (visitId_ == resumeFrom_) json_->seek(resumePos_);
   }
   if (!skip_) {
-    *info_ = ChannelInfo();
+    memset((void*)info_, 0, sizeof(ChannelInfo));  // all empty: no temporary on the stack
     info_->name = name;
-    info_->type = type;
+    info_->type.code = code;
+    info_->type.count = count;
     info_->data = data;
     info_->memSize = memSize;
     info_->access = access;
@@ -65,8 +69,18 @@ Device& Device::declare(Text name, void* data, ValueType type, uint16_t memSize,
   return *this;
 }
 
+Device& Device::declareStruct(Text name, void* data, Text layout, uint16_t memSize) {
+  declare(name, data, kStruct, 0, memSize, kReadable);
+  if (!skip_) {
+    info_->type.layout = layout;
+    info_->type.structs = structCodec;  // referenced only here: a sketch without structs links none
+    info_->fields = &describeFields;
+  }
+  return *this;
+}
+
 Device& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk) {
-  declare(name, nullptr, ValueType{arg, 0, Text(), nullptr}, scalarSize(arg), access);
+  declare(name, nullptr, arg, 0, scalarSize(arg), access);
   if (!skip_) {
     info_->ret = ret;
     info_->fn = fn;
@@ -103,7 +117,7 @@ void Device::finishChannel() {
       if ((info_->flags & kHasFailsafe) && info_->data) {
         uint8_t n = info_->type.count ? info_->type.count : 1;
         uint8_t size = scalarSize(info_->type.code);
-        for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_->data + i * size, info_->failsafe.b, size);
+        for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_->data + i * size, &info_->failsafe, size);
       }
       break;
     default:
@@ -202,13 +216,13 @@ void Device::describeChannel() {
   }
   if (info_->flags & kHasRange) {
     j.key(HUBWIRE_TEXT("min"));
-    info_->ops(info_->min.b, nullptr, nullptr, &j);
+    info_->ops(&info_->min, nullptr, nullptr, &j);
     j.key(HUBWIRE_TEXT("max"));
-    info_->ops(info_->max.b, nullptr, nullptr, &j);
+    info_->ops(&info_->max, nullptr, nullptr, &j);
   }
   if (info_->flags & kHasFailsafe) {
     j.key(HUBWIRE_TEXT("fs"));
-    info_->ops(info_->failsafe.b, nullptr, nullptr, &j);
+    info_->ops(&info_->failsafe, nullptr, nullptr, &j);
   }
   if (!info_->description.empty()) {
     j.key(HUBWIRE_TEXT("d"));
@@ -565,11 +579,12 @@ void Device::sendSamples() {
 #endif
 }
 
-bool Device::emitRaw(uint8_t id, const void* value, ValueType type) {
+bool Device::emitRaw(uint8_t id, const void* value, uint8_t size) {
   if (!started_ || id == 0 || eventCount_ >= HUBWIRE_EVENT_QUEUE) return false;
   QueuedEvent& e = events_[(eventHead_ + eventCount_) % HUBWIRE_EVENT_QUEUE];
   e.id = id;
-  e.len = (uint8_t)type.toWire(value, e.data);
+  e.len = size;
+  memcpy(e.data, value, size);
   ++eventCount_;
   return true;
 }

@@ -52,11 +52,20 @@ struct Event {
 // Returns false when the function refused the value (controls returning bool).
 typedef bool (*Thunk)(void (*fn)(), const uint8_t* arg, uint8_t* ret);
 
-// Room for one scalar of any type the board carries: a range limit or a failsafe value, kept in
-// the channel's own type so that no value is ever converted (no soft-float code on AVR).
-struct ScalarBytes {
-  uint8_t b[HUBWIRE_HAS_F64 ? 8 : 4];
-};
+// Room for one scalar of any type the board carries: a range limit or a failsafe value, kept as
+// the bytes of the channel's own type so that no value is ever converted (no soft-float code on
+// AVR). An integer, so that it travels in registers.
+#if HUBWIRE_HAS_F64
+typedef uint64_t ScalarBits;
+#else
+typedef uint32_t ScalarBits;
+#endif
+template <typename T>
+ScalarBits bitsOf(T v) {
+  ScalarBits b = 0;
+  memcpy(&b, &v, sizeof(T));  // little-endian (config.h): the value sits in the low bytes
+  return b;
+}
 // Writes an integer or float as a JSON number.
 template <typename T>
 void putNumber(JsonWindow& j, T v) {
@@ -73,15 +82,15 @@ inline void putNumber(JsonWindow& j, double v) { j.number((float)v); }
 // What a range or failsafe needs to know about its type, instantiated only for the types that are
 // given one: a sketch without float ranges links no float comparison or printing.
 // print != null: writes *v as a JSON number and returns true. Otherwise: *v within [*lo, *hi]?
-typedef bool (*ScalarOps)(const uint8_t* v, const ScalarBytes* lo, const ScalarBytes* hi, JsonWindow* print);
+typedef bool (*ScalarOps)(const void* v, const ScalarBits* lo, const ScalarBits* hi, JsonWindow* print);
 
 template <typename T>
-bool scalarOps(const uint8_t* v, const ScalarBytes* lo, const ScalarBytes* hi, JsonWindow* print) {
+bool scalarOps(const void* v, const ScalarBits* lo, const ScalarBits* hi, JsonWindow* print) {
   T x, a, b;
   memcpy(&x, v, sizeof(T));
   if (print) return putNumber(*print, x), true;
-  memcpy(&a, lo->b, sizeof(T));
-  memcpy(&b, hi->b, sizeof(T));
+  memcpy(&a, lo, sizeof(T));
+  memcpy(&b, hi, sizeof(T));
   return x >= a && x <= b;  // NaN fails
 }
 
@@ -94,7 +103,7 @@ struct ChannelInfo {
   void (*fn)();      // change callback, or the function a control/action calls
   Thunk thunk;       // how to call fn with an argument
   ScalarOps ops;     // range / failsafe: their type's comparison and printing
-  ScalarBytes min, max, failsafe;
+  ScalarBits min, max, failsafe;
   uint16_t memSize;  // sizeof the variable, to check struct layouts
   uint8_t access;
   uint8_t flags;
@@ -190,11 +199,11 @@ class Device : private DeviceState {
     Builder& writable() { return dev_.addAccess(kWritable), *this; }
     Builder& streamable() { return dev_.addAccess(kStreamable), *this; }
     // Writes outside [min, max] (any element of an array) are refused with NAK OUT_OF_RANGE.
-    Builder& range(T min, T max) { return dev_.setScalars(&min, &max, sizeof(T), &scalarOps<T>), *this; }
+    Builder& range(T min, T max) { return dev_.setRange(bitsOf(min), bitsOf(max), &scalarOps<T>), *this; }
     Builder& unit(Text u) { return dev_.setText(0, u), *this; }
     Builder& describe(Text d) { return dev_.setText(1, d), *this; }
     // The value (every element of an array) is set to this when the link is lost.
-    Builder& failsafe(T value) { return dev_.setScalars(&value, nullptr, sizeof(T), &scalarOps<T>), *this; }
+    Builder& failsafe(T value) { return dev_.setFailsafe(bitsOf(value), &scalarOps<T>), *this; }
     // Called after the hub wrote a new value into the variable.
     Builder& onChange(void (*fn)()) { return dev_.setChange(fn), *this; }
 
@@ -213,27 +222,25 @@ class Device : private DeviceState {
   template <typename T>
   Builder<T> expose(Text name, T& var) {
     checkValue<T, sizeof(T)>();
-    return declare(name, &var, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kReadable);
+    return declare(name, &var, TypeOf<T>::code, 0, sizeof(T), kReadable);
   }
   template <typename T, size_t N>
   Builder<T> expose(Text name, T (&arr)[N]) {
     static_assert(N <= 255, "arrays hold at most 255 elements");
     checkValue<T, sizeof(arr)>();
-    return declare(name, arr, ValueType{TypeOf<T>::code, (uint8_t)N, Text(), nullptr}, sizeof(arr), kReadable);
+    return declare(name, arr, TypeOf<T>::code, (uint8_t)N, sizeof(arr), kReadable);
   }
   template <size_t N>
   Builder<NotNumeric> expose(Text name, char (&str)[N]) {
     static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
     static_assert(N + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "string longer than HUBWIRE_MAX_PAYLOAD - 3: raise it");
-    return declare(name, str, ValueType{kStr, (uint8_t)(N - 1), Text(), nullptr}, N, kReadable);
+    return declare(name, str, kStr, (uint8_t)(N - 1), N, kReadable);
   }
   // A struct with named fields, laid out by text such as F("ax:f32,ay:f32,gyro:i16[3]").
   template <typename T>
   Builder<NotNumeric> expose(Text name, T& var, Text layout) {
     static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
-    declare(name, &var, ValueType{kStruct, 0, layout, structCodec}, sizeof(T), kReadable);
-    if (!skip_) info_->fields = &describeFields;  // referenced only here: no struct, no code
-    return *this;
+    return declareStruct(name, &var, layout, sizeof(T));
   }
 
   // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
@@ -274,7 +281,7 @@ class Device : private DeviceState {
   Builder<NotNumeric> event(Text name, Event<T>& ev) {
     checkValue<T, sizeof(T)>();
     static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
-    declare(name, nullptr, ValueType{TypeOf<T>::code, 0, Text(), nullptr}, sizeof(T), kEventAccess);
+    declare(name, nullptr, TypeOf<T>::code, 0, sizeof(T), kEventAccess);
     if (!skip_) info_->eventId = &ev.id;
     return *this;
   }
@@ -292,7 +299,7 @@ class Device : private DeviceState {
   // Queues an event for the hub; false when the queue is full or the event was not declared.
   template <typename T>
   bool emit(const Event<T>& ev, const typename Same<T>::type& value) {
-    return emitRaw(ev.id, &value, ValueType{TypeOf<T>::code, 0, Text(), nullptr});
+    return emitRaw(ev.id, &value, sizeof(T));  // a scalar: its memory is its wire form
   }
 
   void onLinkUp(void (*fn)()) { onLinkUp_ = fn; }
@@ -311,10 +318,12 @@ class Device : private DeviceState {
   const LinkCounters& counters() const { return rx_.counters; }
 
  private:
-  Device& declare(Text name, void* data, ValueType type, uint16_t memSize, uint8_t access);
+  Device& declare(Text name, void* data, TypeCode code, uint8_t count, uint16_t memSize, uint8_t access);
+  Device& declareStruct(Text name, void* data, Text layout, uint16_t memSize);
   Device& declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk);
   void addAccess(uint8_t a);
-  void setScalars(const void* a, const void* b, uint8_t size, ScalarOps ops);  // b null: failsafe
+  void setRange(ScalarBits min, ScalarBits max, ScalarOps ops);
+  void setFailsafe(ScalarBits value, ScalarOps ops);
   void setText(uint8_t which, Text t);  // 0 unit, 1 description
   void setChange(void (*fn)());
   void finishChannel();  // the visited channel is complete: act on it for the current mode
@@ -328,7 +337,7 @@ class Device : private DeviceState {
   void describeAll(JsonWindow& j);
   void describeHead(JsonWindow& j);  // {"p":1,"n":...,"ch":[
   void checkChannel();
-  bool emitRaw(uint8_t id, const void* value, ValueType type);
+  bool emitRaw(uint8_t id, const void* value, uint8_t size);
 
   void handle(const Frame& f);
   void onHello(const Frame& f);
