@@ -23,7 +23,7 @@ TARGET = 80  # cycles per wire byte
 # region -> (label, payload bytes of the frame fed to hub.update(), or None for a part measured alone)
 REGIONS = {
     1: ("calibration (two marks, nothing between)", None),
-    2: ("begin(): 12 Rover declarations checked, names unique, descriptor hashed, hello", None),
+    2: ("begin(): 12 Rover declarations checked, descriptor hashed, hello", None),
     3: ("hub hello -> link up + hello reply", 16),
     4: ("first update() after link-up (sends a heartbeat)", None),
     5: ("idle update(), nothing received", None),
