@@ -241,7 +241,9 @@ def test_streams_at_the_requested_rate(rover: Any) -> None:
         assert all((b - a) & 0xFF == 1 for a, b in zip(seqs, seqs[1:])), f"{name}: seq gaps {seqs}"
         # the device's own clock: ms since the previous sample
         since = [x.since_ms for x in got[1:]]
-        assert got[0].since_ms == 0
+        # the first sample: ms since the subscription (0 when sent at once, a few ms when the
+        # device's frame buffer was busy with the next request arriving), well under one interval
+        assert 0 <= got[0].since_ms < 1000 / hz / 2, f"{name}: first since_ms {got[0].since_ms}"
         assert statistics.mean(since) == pytest.approx(1000 / hz, rel=0.10), f"{name}: since_ms {since}"
         assert statistics.median(since) == pytest.approx(1000 / hz, rel=0.10)
         # the hub's clock: arrival times
