@@ -191,18 +191,30 @@ TEST_F(Session, RepeatsAnnouncementWhileUnlinked) {
   EXPECT_EQ(f[0].type, '*');
 }
 
+// One boot of the test sketch with the same seed every time, as a board that cannot tell boots apart.
+struct Boot {
+  FakeStream stream;
+  FakeClock clock;
+  Port port{stream, clock};
+  Device device{port};
+  bool begun;
+  Boot() {
+    dut = &device;
+    begun = device.begin("tester", declarations, "2.1", 0x1234);
+  }
+};
+
 // A board that loses power boots with the same RAM, counter and code path every time; only the
 // moment it first hears the hub differs. The nonce must differ with it, or the hub would take the
 // new boot for the old session (and drop its first event as a duplicate).
 TEST(Nonce, DependsOnWhenTheHubIsFirstHeard) {
   uint32_t seen[2];
   for (int boot = 0; boot < 2; ++boot) {
-    FakeStream s;
-    FakeClock c;
-    Port p(s, c);
-    Device d(p);
-    dut = &d;
-    ASSERT_TRUE(d.begin("tester", declarations, "2.1", 0x1234));  // same seed each boot
+    Boot b;  // same seed each boot
+    ASSERT_TRUE(b.begun);
+    FakeStream& s = b.stream;
+    FakeClock& c = b.clock;
+    Device& d = b.device;
     c.now += 40;
     c.us = 40000 + (uint32_t)boot * 1372;  // the hub's hello lands at another instant
     sendFrame(s, '*', 0, 0, hubHello(9));
@@ -220,12 +232,11 @@ TEST(Nonce, DependsOnWhenTheHubIsFirstHeard) {
 TEST(Nonce, DependsOnTheHubsNonceInTheFirstHelloHeard) {
   uint32_t seen[2];
   for (int boot = 0; boot < 2; ++boot) {
-    FakeStream s;
-    FakeClock c;
-    Port p(s, c);
-    Device d(p);
-    dut = &d;
-    ASSERT_TRUE(d.begin("tester", declarations, "2.1", 0x1234));
+    Boot b;
+    ASSERT_TRUE(b.begun);
+    FakeStream& s = b.stream;
+    FakeClock& c = b.clock;
+    Device& d = b.device;
     c.us = 40000;  // identical timing
     sendFrame(s, '*', 0, 0, hubHello(100 + (uint32_t)boot));
     d.update();

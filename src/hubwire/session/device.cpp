@@ -236,7 +236,6 @@ uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
   json_ = &j;
   // Resume at the channel the previous chunk ended in, when this chunk starts after it.
   resumeFrom_ = (out && resumeId_ && start >= resumePos_) ? resumeId_ : 0;
-
   describeAll(j);
   json_ = nullptr;
   if (out && j.markId()) {
@@ -343,7 +342,7 @@ void Device::update() {
   }
   if (!beatSent_ || (uint16_t)(now - lastSent_) >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat(now);
   if (eventCount_ && (!eventInFlight_ || (uint16_t)(now - eventSentAt_) >= HUBWIRE_EVENT_RETRY_MS)) sendEvent(now);
-  sendSamples();
+  sendSamples(now);
 }
 
 void Device::handle(const Frame& f) {
@@ -475,9 +474,9 @@ void Device::onChunk(const Frame& f) {
 void Device::onRequest(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
-  if (!(info_->access & kReadable)) return sendNak(f, kErrNotReadable);
+  if (!(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
   if (f.len != 0) return sendNak(f, kErrBadLength);
-  reply(kMsgResponse, f, (uint8_t)info_->type.toWire(info_->data, tx_.payload()));
+  reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
 }
 
 void Device::onControl(const Frame& f) {
@@ -486,28 +485,28 @@ void Device::onControl(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) {
     code = kErrUnknownChannel;
-  } else if (!(info_->access & (kWritable | kCallable))) {
+  } else if (!(ch.access & (kWritable | kCallable))) {
     code = kErrNotWritable;
   } else {
-    const ValueType& t = info_->type;
+    const ValueType& t = ch.type;
     code = t.check(f.payload, f.len);
-    if (code == kOk && (info_->flags & kHasRange)) {
+    if (code == kOk && (ch.flags & kHasRange)) {
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
       for (uint8_t i = 0; i < n && code == kOk; ++i)
-        if (!info_->ops(f.payload + i * size, &info_->min, &info_->max, nullptr)) code = kErrOutOfRange;
+        if (!ch.ops(f.payload + i * size, &ch.min, &ch.max, nullptr)) code = kErrOutOfRange;
     }
     if (code == kOk) {
-      if (info_->thunk) {
+      if (ch.thunk) {
         uint8_t* ret = tx_.payload();
-        if (!info_->thunk(info_->fn, f.payload, ret)) {
+        if (!ch.thunk(ch.fn, f.payload, ret)) {
           code = kErrRejected;
-        } else if (info_->ret != kVoid) {
+        } else if (ch.ret != kVoid) {
           type = kMsgResponse;
-          len = scalarSize(info_->ret);
+          len = scalarSize(ch.ret);
         }
       } else {
-        t.fromWire(f.payload, f.len, info_->data);
-        if (info_->fn) info_->fn();
+        t.fromWire(f.payload, f.len, ch.data);
+        if (ch.fn) ch.fn();
       }
     }
   }
@@ -525,7 +524,7 @@ void Device::onControl(const Frame& f) {
 void Device::onSubscribe(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
-  if (!(info_->access & kStreamable)) return sendNak(f, kErrNotStreamable);
+  if (!(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
   if (f.len != 2) return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
@@ -554,12 +553,11 @@ void Device::onSubscribe(const Frame& f) {
   reply(kMsgAck, f, 2);
 }
 
-void Device::sendSamples() {
+void Device::sendSamples(uint16_t now) {
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
     Subscription& s = streams_[i];
     if (!s.id) continue;
-    uint16_t now = ms();
     if ((int16_t)(now - s.due) < 0) continue;
     ChannelInfo ch;
     if (!find(s.id, ch)) {
@@ -567,7 +565,7 @@ void Device::sendSamples() {
       continue;
     }
     uint8_t* out = tx_.payload();
-    uint16_t len = info_->type.toWire(info_->data, out + kSampleHeader);
+    uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
     if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
     storeU16(out, (uint16_t)(now - s.last));
     tx_.send(port_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));

@@ -353,7 +353,7 @@ class Device : private DeviceState {
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
-  void sendSamples();
+  void sendSamples(uint16_t now);
   void sendNak(const Frame& f, uint8_t code);
   void reply(uint8_t type, const Frame& f, uint8_t len);
   uint8_t maxOut() const { return peerMax_ < HUBWIRE_MAX_PAYLOAD ? peerMax_ : HUBWIRE_MAX_PAYLOAD; }
