@@ -39,6 +39,14 @@ struct Text {
 
 inline Text flashText(const char* s) { return Text(s, true); }
 
+// Puts a constant table in flash on AVR (elsewhere constants are not in RAM anyway); read it
+// through a flash Text.
+#if defined(__AVR__)
+#define HUBWIRE_FLASH PROGMEM
+#else
+#define HUBWIRE_FLASH
+#endif
+
 // A string literal kept in flash on AVR (where literals otherwise cost RAM), as a Text.
 #if defined(__AVR__)
 #define HUBWIRE_TEXT(s) ::hubwire::flashText(PSTR(s))

@@ -148,36 +148,35 @@ void Device::checkChannel() {
 
 // ---------------------------------------------------------------- descriptor
 
+// "rw" etc., and the closing quote (the fragment opened it).
 static void putAccess(JsonWindow& j, uint8_t a) {
-  j.put('"');
-  if (a & kReadable) j.put('r');
-  if (a & kWritable) j.put('w');
-  if (a & kCallable) j.put('c');
-  if (a & kEventAccess) j.put('e');
-  if (a & kStreamable) j.put('s');
+  static const char kLetters[] HUBWIRE_FLASH = "rwces";  // kReadable, kWritable, ... in bit order
+  for (uint8_t i = 0; i < 5; ++i, a >>= 1)
+    if (a & 1) j.put(flashText(kLetters).at(i));
   j.put('"');
 }
 
-static void putType(JsonWindow& j, TypeCode code) { j.text(typeName(code)); }
+// A type name and the closing quote (the fragment opened it).
+static void putType(JsonWindow& j, TypeCode code) {
+  j.flash(typeName(code).ptr);
+  j.put('"');
+}
 
-// "f":[{"n":"ax","t":"f32"},...] from the layout text "ax:f32,...".
+// ,"f":[{"n":"ax","t":"f32"},...] from the layout text "ax:f32,...".
 void Device::describeFields(JsonWindow& j, const ValueType& t) {
-  j.key(HUBWIRE_TEXT("f"));
-  j.put('[');
+  j.fragment(kFragFields);
   LayoutReader r(t.layout);
   LayoutField f;
   while (t.structs(kStructNext, t.layout, &r, &f, 0)) {
     if (f.nameStart) j.put(',');
-    j.put('{');
-    j.noComma();
-    j.key(HUBWIRE_TEXT("n"));
+    j.fragment(kFragField);
     j.put('"');
     for (uint16_t i = 0; i < f.nameLen; ++i) j.put(t.layout.at((uint16_t)(f.nameStart + i)));
     j.put('"');
-    j.key(HUBWIRE_TEXT("t"));
+    j.fragment(kFragType);
     putType(j, f.code);
     if (f.count) {
-      j.key(HUBWIRE_TEXT("c"));
+      j.fragment(kFragCount);
       j.uinteger(f.count);
     }
     j.put('}');
@@ -191,41 +190,39 @@ void Device::describeChannel() {
     j.mark(visitId_);
   }
   if (visitId_ > 1) j.put(',');
-  j.put('{');
-  j.noComma();
-  j.key(HUBWIRE_TEXT("id"));
+  j.fragment(kFragChannel);
   j.uinteger(visitId_);
-  j.key(HUBWIRE_TEXT("n"));
+  j.fragment(kFragName);
   j.text(info_->name);
-  j.key(HUBWIRE_TEXT("a"));
+  j.fragment(kFragAccess);
   putAccess(j, info_->access);
-  j.key(HUBWIRE_TEXT("t"));
+  j.fragment(kFragType);
   putType(j, info_->type.code);
   if (info_->type.count) {
-    j.key(HUBWIRE_TEXT("c"));
+    j.fragment(kFragCount);
     j.uinteger(info_->type.count);
   }
   if (info_->fields) info_->fields(j, info_->type);
   if (info_->ret != kVoid) {
-    j.key(HUBWIRE_TEXT("rt"));
+    j.fragment(kFragReturn);
     putType(j, info_->ret);
   }
   if (!info_->unit.empty()) {
-    j.key(HUBWIRE_TEXT("u"));
+    j.fragment(kFragUnit);
     j.text(info_->unit);
   }
   if (info_->flags & kHasRange) {
-    j.key(HUBWIRE_TEXT("min"));
+    j.fragment(kFragMin);
     info_->ops(&info_->min, nullptr, nullptr, &j);
-    j.key(HUBWIRE_TEXT("max"));
+    j.fragment(kFragMax);
     info_->ops(&info_->max, nullptr, nullptr, &j);
   }
   if (info_->flags & kHasFailsafe) {
-    j.key(HUBWIRE_TEXT("fs"));
+    j.fragment(kFragFailsafe);
     info_->ops(&info_->failsafe, nullptr, nullptr, &j);
   }
   if (!info_->description.empty()) {
-    j.key(HUBWIRE_TEXT("d"));
+    j.fragment(kFragDescription);
     j.text(info_->description);
   }
   j.put('}');
@@ -254,17 +251,15 @@ void Device::describeAll(JsonWindow& j) {
 }
 
 void Device::describeHead(JsonWindow& j) {
-  j.put('{');
-  j.key(HUBWIRE_TEXT("p"));
+  j.fragment(kFragHead);
   j.uinteger(kProtocolVersion);
-  j.key(HUBWIRE_TEXT("n"));
+  j.fragment(kFragName);
   j.text(name_);
   if (!firmware_.empty()) {
-    j.key(HUBWIRE_TEXT("fw"));
+    j.fragment(kFragFirmware);
     j.text(firmware_);
   }
-  j.key(HUBWIRE_TEXT("ch"));
-  j.put('[');
+  j.fragment(kFragChannels);
 }
 
 // ---------------------------------------------------------------- running

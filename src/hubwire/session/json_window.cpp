@@ -12,9 +12,34 @@ void JsonWindow::put(char c) {
   ++pos_;
 }
 
-void JsonWindow::raw(const char* s) {
-  while (*s) put(*s++);
+namespace {
+const uint8_t kFragmentStride = 8;
+const char kFragments[] HUBWIRE_FLASH =
+    "{\"p\":\0\0\0"
+    ",\"n\":\0\0\0"
+    ",\"fw\":\0\0"
+    ",\"ch\":[\0"
+    "{\"id\":\0\0"
+    ",\"a\":\"\0\0"
+    ",\"t\":\"\0\0"
+    ",\"c\":\0\0\0"
+    ",\"f\":[\0\0"
+    ",\"rt\":\"\0"
+    ",\"u\":\0\0\0"
+    ",\"min\":\0"
+    ",\"max\":\0"
+    ",\"fs\":\0\0"
+    ",\"d\":\0\0\0"
+    "{\"n\":";
+static_assert(sizeof(kFragments) == kFragField * kFragmentStride + 6, "fragments are kFragmentStride apart");
+}  // namespace
+
+void JsonWindow::flash(const char* s) {
+  Text t = flashText(s);
+  for (uint8_t i = 0; char c = t.at(i); ++i) put(c);
 }
+
+void JsonWindow::fragment(Fragment f) { flash(kFragments + f * kFragmentStride); }
 
 void JsonWindow::text(Text t) {
   put('"');
@@ -25,7 +50,10 @@ void JsonWindow::text(Text t) {
       put('\\');
       put(c);
     } else if ((uint8_t)c < 0x20) {  // control characters: \u00XX
-      raw("\\u00");
+      put('\\');
+      put('u');
+      put('0');
+      put('0');
       put((char)('0' + ((uint8_t)c >> 4)));  // c < 0x20: the high digit is 0 or 1
       put((char)((c & 15) < 10 ? '0' + (c & 15) : 'a' + (c & 15) - 10));
     } else {
@@ -33,13 +61,6 @@ void JsonWindow::text(Text t) {
     }
   }
   put('"');
-}
-
-void JsonWindow::key(Text k) {
-  if (needComma_) put(',');
-  needComma_ = true;
-  text(k);  // keys are plain letters: quoting is all the escaping they need
-  put(':');
 }
 
 void JsonWindow::uinteger(uint32_t v) {

@@ -10,15 +10,36 @@
 
 namespace hubwire {
 
+// The descriptor's fixed pieces (keys with their punctuation), kept in one flash string: writing
+// one costs a call with a byte argument. Keys other than the first of an object carry their comma.
+enum Fragment : uint8_t {
+  kFragHead,         // {"p":
+  kFragName,         // ,"n":
+  kFragFirmware,     // ,"fw":
+  kFragChannels,     // ,"ch":[
+  kFragChannel,      // {"id":
+  kFragAccess,       // ,"a":"
+  kFragType,         // ,"t":"
+  kFragCount,        // ,"c":
+  kFragFields,       // ,"f":[
+  kFragReturn,       // ,"rt":"
+  kFragUnit,         // ,"u":
+  kFragMin,          // ,"min":
+  kFragMax,          // ,"max":
+  kFragFailsafe,     // ,"fs":
+  kFragDescription,  // ,"d":
+  kFragField,        // {"n":
+};
+
 class JsonWindow {
  public:
   // Copy characters [start, start + len) into out; out may be null to only count and hash.
   JsonWindow(uint16_t start, uint16_t len, uint8_t* out) : start_(start), len_(len), out_(out), pos_(0), hash_(0x811C9DC5UL) {}
 
   void put(char c);
-  void raw(const char* s);  // RAM literal, no escaping
-  void text(Text t);        // quoted and escaped
-  void key(Text k);         // ,"k": or "k": as needed
+  void flash(const char* s);  // a flash string (Text's rules), no escaping
+  void fragment(Fragment f);
+  void text(Text t);  // quoted and escaped
   void number(float v);
   void uinteger(uint32_t v);
   void integer(int32_t v);
@@ -36,15 +57,12 @@ class JsonWindow {
   }
   uint8_t markId() const { return markId_; }
   uint16_t markPos() const { return markPos_; }
-  void comma() { needComma_ = true; }
-  void noComma() { needComma_ = false; }
 
  private:
   uint16_t start_, len_;
   uint8_t* out_;
   uint16_t pos_;
   uint32_t hash_;
-  bool needComma_ = false;
   uint8_t markId_ = 0;
   uint16_t markPos_ = 0;
 };

@@ -6,12 +6,6 @@ namespace hubwire {
 
 namespace {
 
-#if defined(__AVR__)
-#define HUBWIRE_FLASH PROGMEM
-#else
-#define HUBWIRE_FLASH
-#endif
-
 // One flash string holding every type name, 7 bytes apart, so the table costs no pointers.
 const char kTypeNames[] HUBWIRE_FLASH =
     "void\0\0\0bool\0\0\0u8\0\0\0\0\0i8\0\0\0\0\0u16\0\0\0\0i16\0\0\0\0u32\0\0\0\0i32\0\0\0\0f32\0\0\0\0f64\0\0\0\0"
