@@ -23,9 +23,12 @@ emulator: cpp
 simuno:
 	$(MAKE) -C tools/simuno BUILD_DIR=$(CURDIR)/$(BUILD)/simuno
 
-# Rover for the Uno, as the simulated-Uno tests and the demo run it.
+# Every example for the Uno, as the simulated-Uno tests (and, for Rover, the demo) run them.
+EXAMPLES := $(notdir $(patsubst %/,%,$(wildcard examples/*/)))
 uno-firmware:
-	bash tools/arduino/build-sketch.sh examples/Rover arduino:avr:uno $(BUILD)/uno/Rover >/dev/null
+	@for e in $(EXAMPLES); do \
+	  bash tools/arduino/build-sketch.sh examples/$$e arduino:avr:uno $(BUILD)/uno/$$e >/dev/null || exit 1; \
+	done
 
 test: setup
 	$(MAKE) test-cpp test-avr-core test-examples test-arm test-manifests test-fuzz test-python

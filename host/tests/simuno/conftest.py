@@ -12,7 +12,7 @@ import signal
 import sys
 import subprocess
 import time
-from typing import Any, Callable, Iterator, Optional
+from typing import Any, Callable, Iterator, List, Optional
 
 import pytest
 
@@ -176,3 +176,47 @@ def wait_until(predicate: Callable[[], Any], timeout: float = 5.0, what: str = "
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
         time.sleep(interval)
+
+
+def example_elf(name: str) -> str:
+    """examples/<name> built for the Uno by `make uno-firmware`."""
+    return os.path.join(REPO, "build", "uno", name, f"{name}.ino.elf")
+
+
+class Examples:
+    """Starts example sketches on simulated Unos: ``examples.start("Failsafe")`` returns the
+    connected hub device, ``examples.sim("Failsafe")`` its simulator."""
+
+    def __init__(self, binary: str, tmp_path: Any) -> None:
+        self.binary = binary
+        self.tmp_path = tmp_path
+        self.sims: dict = {}
+        self.devices: List[Any] = []
+
+    def start(self, name: str) -> Any:
+        import hubwire
+
+        elf = example_elf(name)
+        if not os.path.isfile(elf):
+            pytest.fail(f"{elf} missing; {BUILD_HINT}", pytrace=False)
+        sim = Simuno(self.binary, elf, str(self.tmp_path / name), str(self.tmp_path / f"{name}.log"))
+        sim.start()
+        self.sims[name] = sim
+        dev = hubwire.connect(sim.link)
+        self.devices.append(dev)
+        return dev
+
+    def sim(self, name: str) -> Simuno:
+        return self.sims[name]
+
+
+@pytest.fixture
+def examples(simuno_build: tuple, tmp_path: Any) -> Iterator[Examples]:
+    """Example sketches on simulated Unos (see :class:`Examples`), all closed and stopped after the test."""
+    ex = Examples(simuno_build[0], tmp_path)
+    yield ex
+    for dev in ex.devices:
+        dev.close()
+    for sim in ex.sims.values():
+        status = sim.stop()
+        assert status == 0, f"simuno exited with status {status}; its log:\n{sim.log_text()}"

@@ -1,0 +1,56 @@
+// Failsafe: stop the motor when the hub goes silent.
+//
+// A robot must not keep driving when the computer steering it crashes, hangs or is unplugged.
+// Hubwire listens for the hub's heartbeats. After a few missed ones (about 1 s with the default
+// hub) it declares the link lost and then, in this order:
+//   1. sets every channel that declared a failsafe value to that value (speed -> 0 here);
+//   2. calls the function given to onLinkLost(), where you stop what the values alone do not.
+// When a hub talks to the board again, onLinkUp() runs and the hub can drive again.
+//
+// Try it on the hub:  hubwire set /dev/ttyACM0 speed 50
+//                     then stop the hub (Ctrl-C a script, unplug it): the motor stops within ~1 s
+//                     hubwire get /dev/ttyACM0 stops      how often that happened
+#include <Hubwire.h>
+
+Hubwire hub(Serial);
+
+const uint8_t kMotorPwmPin = 5;  // PWM input of a motor driver
+const uint8_t kMotorDirPin = 4;  // its direction input
+
+int16_t speed;   // percent, -100..100, written by the hub
+uint16_t stops;  // how often the failsafe stopped the motor
+
+// Runs after every write from the hub (onChange) and after the failsafe (linkLost).
+void driveMotor() {
+  digitalWrite(kMotorDirPin, speed < 0 ? HIGH : LOW);
+  analogWrite(kMotorPwmPin, (uint8_t)((uint16_t)abs(speed) * 255 / 100));
+}
+
+void linkLost() {
+  // speed already holds its failsafe value, 0: pass it on to the motor driver.
+  driveMotor();
+  ++stops;
+  digitalWrite(LED_BUILTIN, LOW);  // the LED shows whether a hub is in charge
+}
+
+void linkUp() { digitalWrite(LED_BUILTIN, HIGH); }
+
+void channels() {
+  // failsafe(0): the value speed takes when the link is lost. The hub sees it in the descriptor.
+  hub.expose(F("speed"), speed).writable().range(-100, 100).unit(F("%")).failsafe(0).onChange(driveMotor);
+  hub.expose(F("stops"), stops).describe(F("times the failsafe stopped the motor"));
+}
+
+void setup() {
+  Serial.begin(115200);
+  pinMode(kMotorPwmPin, OUTPUT);
+  pinMode(kMotorDirPin, OUTPUT);
+  pinMode(LED_BUILTIN, OUTPUT);
+  hub.onLinkLost(linkLost);
+  hub.onLinkUp(linkUp);
+  hub.begin(F("failsafe"), channels);
+}
+
+void loop() {
+  hub.update();  // also where a silent hub is noticed: keep loop() free of long delays
+}
