@@ -30,10 +30,21 @@ read -r bf bs _ < <(size_of bench/footprint/SerialEcho)
   echo
   echo "| sketch | flash | SRAM | flash over baseline | SRAM over baseline | target flash / SRAM | flash | SRAM | malloc linked |"
   echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
-  for s in Minimal:2560:200 Rover:4096:350; do
-    IFS=: read -r name tf ts <<<"$s"
+  # The issue sets targets for Minimal and Rover; the focused examples show the fixed cost (what
+  # any sketch pays) apart from what each channel adds.
+  for dir in examples/*/; do
+    name=$(basename "$dir")
+    case $name in
+      Minimal) tf=2560 ts=200 ;;
+      Rover) tf=4096 ts=350 ;;
+      *) tf="" ts="" ;;
+    esac
     read -r f r heap < <(size_of "examples/$name")
     df=$((f - bf)); ds=$((r - bs))
+    if [ -z "$tf" ]; then
+      echo "| $name | $f | $r | +$df | +$ds | none | - | - | $heap |"
+      continue
+    fi
     vf="met"; vs="met"
     if [ $df -gt "$tf" ]; then vf="**missed**"; fi
     if [ $ds -gt "$ts" ]; then vs="**missed**"; fi
