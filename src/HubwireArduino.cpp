@@ -32,9 +32,8 @@ uint32_t bootNonce() {
 #elif defined(ESP32)
   bootCounter ^= esp_random();
 #endif
-  bootCounter = bootCounter * 1664525UL + 1013904223UL;  // an LCG step per boot
-  uint32_t n = bootCounter ^ (micros() * 2654435761UL);
-  return n ? n : 1;
+  // Differs from the last boot; Device mixes in the moment the hub is first heard and its nonce.
+  return ++bootCounter;
 }
 
 }  // namespace hubwire

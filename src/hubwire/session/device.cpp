@@ -301,12 +301,15 @@ bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t se
 // the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
 // connection even where a simulated or freshly powered board repeats everything else.
 void Device::drawNonce(uint32_t hubNonce) {
-  uint32_t parts[3] = {nonce_, portMicros(port_), hubNonce};
-  const uint8_t* bytes = (const uint8_t*)parts;
-  uint32_t h = kFnvOffset;
-  for (uint8_t i = 0; i < sizeof(parts); ++i) h = fnv1a(h, bytes[i]);
+  uint32_t h = mixNonce(mixNonce(mixNonce(kFnvOffset, nonce_), portMicros(port_)), hubNonce);
   nonce_ = h ? h : 1;  // never 0: the protocol reserves it
   nonceDrawn_ = true;
+}
+
+// FNV-1a over the four bytes of v, least significant first.
+uint32_t Device::mixNonce(uint32_t h, uint32_t v) {
+  for (uint8_t i = 0; i < 4; ++i, v >>= 8) h = fnv1a(h, (uint8_t)v);
+  return h;
 }
 
 void Device::update() {
