@@ -1,6 +1,7 @@
-"""Fixtures: examples/Rover built for the Uno, running in simavr (build/simuno/simuno) on a pty.
+"""Fixtures: the examples (Rover, and the others through `examples`) built for the Uno, running in
+simavr (build/simuno/simuno) on a pty.
 
-Nothing is built here: `make simuno uno-firmware` builds both (`make test-python` does it first).
+Nothing is built here: `make simuno uno-firmware` builds them (`make test-python` does it first).
 Override the paths with $HUBWIRE_SIMUNO and $HUBWIRE_UNO_ROVER_ELF, the bootloader time with
 $HUBWIRE_SIMUNO_BOOT_DELAY_MS.
 """
