@@ -166,6 +166,16 @@ def rover(uno: Simuno) -> Iterator[Any]:
         dev.close()
 
 
+def drain_events(evs: Any, quiet: float = 0.4) -> List[Any]:
+    """Events (or stream samples) until none arrived for ``quiet`` seconds; 0: those already here."""
+    got = []
+    while True:
+        ev = evs.get(quiet)
+        if ev is None:
+            return got
+        got.append(ev)
+
+
 def wait_until(predicate: Callable[[], Any], timeout: float = 5.0, what: str = "condition",
                interval: float = 0.02) -> Any:
     """Poll ``predicate`` until it returns something truthy (returned); AssertionError after ``timeout``."""

@@ -6,14 +6,13 @@ import os
 import statistics
 import threading
 import time
-from typing import Any, List
 
 import pytest
 
 from hubwire.errors import InvalidValue, NakError
 from hubwire.wire.messages import NakCode
 
-from .conftest import REPO, Examples, wait_until
+from .conftest import REPO, Examples, drain_events, wait_until
 
 # What each sketch declares, as the hub shows it: (name, access, type, unit, min, max, failsafe).
 DECLARED = {
@@ -103,13 +102,7 @@ def test_streaming_sends_samples_at_the_asked_rate(examples: Examples) -> None:
     with dev.stream("light", hz=hz, meta=True) as light, dev.stream("uptime", hz=hz, meta=True) as up:
         assert light.granted_ms == 50 and up.granted_ms == 50
         time.sleep(1.5)
-        got = {"light": [], "uptime": []}  # type: dict
-        for name, s in (("light", light), ("uptime", up)):
-            while True:
-                x = s.get(0)
-                if x is None:
-                    break
-                got[name].append(x)
+        got = {"light": drain_events(light, 0), "uptime": drain_events(up, 0)}
     for name, samples in got.items():
         assert len(samples) >= 0.9 * hz * 1.5 - 2, f"{name}: {len(samples)} samples"
         since = [x.since_ms for x in samples[1:]]

@@ -23,7 +23,7 @@ from hubwire.wire.messages import NakCode
 
 from rover import ROVER
 
-from .conftest import BOOT_DELAY_MS, Simuno, wait_until
+from .conftest import BOOT_DELAY_MS, Simuno, drain_events, wait_until
 
 
 
@@ -43,16 +43,6 @@ def sent_types(session: Any) -> List[int]:
 
     session.tx_filter = spy
     return types
-
-
-def drain_events(evs: Any, quiet: float = 0.4) -> List[Any]:
-    """Events until none arrived for ``quiet`` seconds."""
-    got = []
-    while True:
-        ev = evs.get(quiet)
-        if ev is None:
-            return got
-        got.append(ev)
 
 
 # -------------------------------------------------------------------------- handshake, discovery
@@ -227,13 +217,7 @@ def test_streams_at_the_requested_rate(rover: Any) -> None:
     with rover.stream("battery", hz=hz, meta=True) as bat, rover.stream("imu", hz=hz, meta=True) as imu:
         assert bat.granted_ms == 50 and imu.granted_ms == 50
         time.sleep(seconds)
-        samples = {"battery": [], "imu": []}  # type: Dict[str, List[Any]]
-        for name, s in (("battery", bat), ("imu", imu)):
-            while True:
-                x = s.get(0)
-                if x is None:
-                    break
-                samples[name].append(x)
+        samples = {"battery": drain_events(bat, 0), "imu": drain_events(imu, 0)}  # type: Dict[str, List[Any]]
     for name, got in samples.items():
         assert len(got) >= 0.9 * hz * seconds - 1, f"{name}: {len(got)} samples in {seconds} s"
         assert all(x.lost == 0 for x in got), f"{name}: samples lost"
