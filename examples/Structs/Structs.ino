@@ -10,7 +10,7 @@
 // Field types: bool u8 i8 u16 i16 u32 i32 f32 (f64 on 32-bit boards), arrays as name:type[n].
 //
 // Try it on the hub:  hubwire get /dev/ttyACM0 gps
-//                     hubwire set /dev/ttyACM0 label '"bench 2"'
+//                     hubwire set /dev/ttyACM0 label "bench 2"
 // or in Python:       board.gps.lat, board.temps[0], board.label = "bench 2"
 #include <Hubwire.h>
 
