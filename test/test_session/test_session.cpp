@@ -699,6 +699,28 @@ TEST_F(Session, SubscribeStreamsSamplesAtTheGrantedInterval) {
     for (auto& f : pump(1)) EXPECT_NE(f.type, 'D');
 }
 
+// Intervals past half the device's 16-bit millisecond clock (32.8 s) keep their schedule too: the
+// first sample leaves at once, the next one interval later, not one on every update. The longest
+// granted is 60 s, so that an update() up to 5.5 s late still sees a sample fall due.
+TEST_F(Session, LongStreamIntervalsKeepTheirSchedule) {
+  link();
+  for (uint32_t asked : {40000u, 65535u}) {
+    uint32_t interval = std::min(asked, 60000u);
+    EXPECT_EQ(transact('S', kSpeed, le<uint16_t>((uint16_t)asked)).payload, le<uint16_t>((uint16_t)interval));
+    std::vector<uint32_t> at;  // when each sample left, in ms after the subscription
+    for (auto& f : others)
+      if (f.type == 'D') at.push_back(0);
+    for (uint32_t t = 100; t <= 2 * interval + 50; t += 100) {
+      sendFrame(stream, 'H', 0, 0, Bytes(10, 0));  // the hub stays alive
+      for (auto& f : pump(100))
+        if (f.type == 'D') at.push_back(t);
+    }
+    uint32_t step = (interval + 99) / 100 * 100;  // updates run every 100 ms
+    EXPECT_EQ(at, (std::vector<uint32_t>{0, step, (2 * interval + 99) / 100 * 100})) << interval;
+    transact('S', kSpeed, le<uint16_t>(0));
+  }
+}
+
 TEST_F(Session, SubscribeClampsChecksAndRunsOutOfSlots) {
   link();
   EXPECT_EQ(transact('S', kSpeed, le<uint16_t>(1)).payload, le<uint16_t>(HUBWIRE_MIN_STREAM_INTERVAL_MS));

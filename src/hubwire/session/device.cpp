@@ -7,6 +7,7 @@ namespace hubwire {
 namespace {
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
 const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: the sender stopped
+const uint16_t kMaxStreamIntervalMs = 60000;
 }  // namespace
 
 // ---------------------------------------------------------------- declarations
@@ -540,9 +541,13 @@ void Device::onSubscribe(const Frame& f) {
       slot->seq = 0;
     }
     if (interval < HUBWIRE_MIN_STREAM_INTERVAL_MS) interval = HUBWIRE_MIN_STREAM_INTERVAL_MS;
+    // Elapsed times on the 16-bit clock are caught within 65,536 - interval ms of falling due:
+    // a cap leaves update() seconds, not one millisecond, to see a sample is due.
+    if (interval > kMaxStreamIntervalMs) interval = kMaxStreamIntervalMs;
     slot->id = f.id;
     slot->interval = interval;
-    slot->due = slot->last = ms();  // the first sample is due now, and reports the time since
+    slot->last = ms();
+    slot->start = (uint16_t)(slot->last - interval);  // the first sample is due now
   }
 #else
   if (interval != 0) return sendNak(f, kErrBusy);
@@ -556,7 +561,7 @@ void Device::sendSamples(uint16_t now) {
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
     Subscription& s = streams_[i];
     if (!s.id) continue;
-    if ((int16_t)(now - s.due) < 0) continue;
+    if ((uint16_t)(now - s.start) < s.interval) continue;
     ChannelInfo ch;
     if (!find(s.id, ch)) {
       s.id = 0;
@@ -569,9 +574,11 @@ void Device::sendSamples(uint16_t now) {
     tx_.send(port_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));
     s.last = now;
     // Keep the schedule (no drift), unless we fell more than one interval behind.
-    s.due = (uint16_t)(s.due + s.interval);
-    if ((int16_t)(now - s.due) >= 0) s.due = (uint16_t)(now + s.interval);
+    s.start = (uint16_t)(s.start + s.interval);
+    if ((uint16_t)(now - s.start) >= s.interval) s.start = now;
   }
+#else
+  (void)now;
 #endif
 }
 

@@ -176,10 +176,13 @@ struct DeviceState {
   uint16_t eventSentAt_;
 
   // Subscriptions (id 0 = free slot).
-  // Times are the low 16 bits of millis(): intervals stay below 65 s, so differences are exact.
+  // Times are the low 16 bits of millis(). Only elapsed times are compared (now - start, unsigned),
+  // so every interval up to 65,535 ms works; a due time compared as signed would not past 32.8 s.
   struct Subscription {
     uint8_t id, seq;
-    uint16_t interval, due, last;  // last: the previous sample, or the subscription
+    uint16_t interval;
+    uint16_t start;  // the current interval began: a sample is due interval ms after it
+    uint16_t last;   // the previous sample, or the subscription
   };
 #if HUBWIRE_MAX_STREAMS > 0
   Subscription streams_[HUBWIRE_MAX_STREAMS];
