@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long clean
 
 all: emulator simuno
 
@@ -31,7 +31,7 @@ uno-firmware:
 	done
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-examples test-arm test-manifests test-fuzz test-python
+	$(MAKE) test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-fuzz test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -49,6 +49,10 @@ test-avr-core:
 
 test-examples:
 	bash tools/arduino/build-all.sh
+
+# Every config.h setting at the ends of its range still builds without warnings from our code.
+test-config-limits:
+	bash tools/arduino/build-config-limits.sh
 
 test-arm:
 	bash tools/arm-check/check-arm.sh

@@ -38,7 +38,7 @@
 #define HUBWIRE_MAX_RETURN HUBWIRE_LARGEST_SCALAR
 #endif
 
-// Highest channel id (channels are numbered 1..N in declaration order).
+// Highest channel id, 1..254 (channels are numbered 1..N in declaration order).
 #ifndef HUBWIRE_MAX_CHANNELS
 #define HUBWIRE_MAX_CHANNELS 32
 #endif
@@ -75,13 +75,16 @@ static_assert(HUBWIRE_EVENT_MAX_PAYLOAD >= 1 && HUBWIRE_EVENT_MAX_PAYLOAD <= HUB
 static_assert(HUBWIRE_MAX_STREAMS >= 0 && HUBWIRE_MAX_STREAMS <= 32, "HUBWIRE_MAX_STREAMS must be 0..32");
 static_assert(HUBWIRE_MAX_RETURN >= 1 && HUBWIRE_MAX_RETURN <= HUBWIRE_MAX_PAYLOAD,
               "HUBWIRE_MAX_RETURN must be 1..HUBWIRE_MAX_PAYLOAD");
-static_assert(HUBWIRE_MAX_CHANNELS >= 1 && HUBWIRE_MAX_CHANNELS <= 255, "HUBWIRE_MAX_CHANNELS must be 1..255");
+// Channel ids are one byte: the first channel too many (reported by its id) must still fit.
+static_assert(HUBWIRE_MAX_CHANNELS >= 1 && HUBWIRE_MAX_CHANNELS <= 254, "HUBWIRE_MAX_CHANNELS must be 1..254");
 static_assert(HUBWIRE_HEARTBEAT_MS >= 10 && HUBWIRE_HEARTBEAT_MS <= 60000, "HUBWIRE_HEARTBEAT_MS must be 10..60000");
 static_assert(HUBWIRE_LOST_AFTER_BEATS >= 2, "HUBWIRE_LOST_AFTER_BEATS must be at least 2");
 // The device keeps 16-bit millisecond times: every interval must stay below 65.5 s.
 static_assert((long)HUBWIRE_HEARTBEAT_MS * HUBWIRE_LOST_AFTER_BEATS <= 65535L,
               "HUBWIRE_HEARTBEAT_MS x HUBWIRE_LOST_AFTER_BEATS must be at most 65535 ms");
 static_assert(HUBWIRE_ANNOUNCE_MS >= 10 && HUBWIRE_ANNOUNCE_MS <= 60000, "HUBWIRE_ANNOUNCE_MS must be 10..60000");
+static_assert(HUBWIRE_MIN_STREAM_INTERVAL_MS >= 1 && HUBWIRE_MIN_STREAM_INTERVAL_MS <= 60000,
+              "HUBWIRE_MIN_STREAM_INTERVAL_MS must be 1..60000 (the longest interval granted)");
 static_assert(HUBWIRE_EVENT_RETRY_MS >= 10 && HUBWIRE_EVENT_RETRY_MS <= 60000, "HUBWIRE_EVENT_RETRY_MS must be 10..60000");
 }  // namespace hubwire
 

@@ -42,7 +42,7 @@ Device::Device(Port& port)
       tx_(frameBuf_) {
   error_ = kSetupNoDeclarations;
   peerMax_ = HUBWIRE_MAX_PAYLOAD;
-  lostAfterMs_ = HUBWIRE_HEARTBEAT_MS * HUBWIRE_LOST_AFTER_BEATS;
+  // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
 
 // Few, small arguments: AVR passes up to 18 bytes in registers and the rest on the stack, at a cost
