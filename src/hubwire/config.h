@@ -62,6 +62,13 @@
 #endif
 
 
+// Keeps a small function called from many places out of line, where GCC's inlining would repeat it.
+#if defined(__GNUC__)
+#define HUBWIRE_NOINLINE __attribute__((noinline))
+#else
+#define HUBWIRE_NOINLINE
+#endif
+
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "Hubwire copies values as little-endian memory; big-endian targets are not supported"
 #endif

@@ -60,11 +60,31 @@ typedef uint64_t ScalarBits;
 #else
 typedef uint32_t ScalarBits;
 #endif
+template <size_t N>
+struct UintOf;
+template <>
+struct UintOf<1> {
+  typedef uint8_t type;
+};
+template <>
+struct UintOf<2> {
+  typedef uint16_t type;
+};
+template <>
+struct UintOf<4> {
+  typedef uint32_t type;
+};
+template <>
+struct UintOf<8> {
+  typedef uint64_t type;
+};
 template <typename T>
 ScalarBits bitsOf(T v) {
-  ScalarBits b = 0;
-  memcpy(&b, &v, sizeof(T));  // little-endian (config.h): the value sits in the low bytes
-  return b;
+  // Through an unsigned integer of T's own size, which stays in registers (copying into the wider
+  // ScalarBits directly goes through the stack on AVR, in every declaration with a range).
+  typename UintOf<sizeof(T)>::type u;
+  memcpy(&u, &v, sizeof(T));
+  return u;  // little-endian (config.h): the value sits in the low bytes
 }
 // Writes an integer or float as a JSON number.
 template <typename T>
@@ -324,11 +344,12 @@ class Device : private DeviceState {
   Device& declare(Text name, void* data, TypeCode code, uint8_t count, uint16_t memSize, uint8_t access);
   Device& declareStruct(Text name, void* data, Text layout, uint16_t memSize);
   Device& declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk);
+  // Not inlined: each is called from every declaration of every sketch, where a call is smaller.
   void addAccess(uint8_t a);
-  void setRange(ScalarBits min, ScalarBits max, ScalarOps ops);
-  void setFailsafe(ScalarBits value, ScalarOps ops);
-  void setText(uint8_t which, Text t);  // 0 unit, 1 description
-  void setChange(void (*fn)());
+  void setRange(ScalarBits min, ScalarBits max, ScalarOps ops) HUBWIRE_NOINLINE;
+  void setFailsafe(ScalarBits value, ScalarOps ops) HUBWIRE_NOINLINE;
+  void setText(uint8_t which, Text t) HUBWIRE_NOINLINE;  // 0 unit, 1 description
+  void setChange(void (*fn)()) HUBWIRE_NOINLINE;
   void finishChannel();  // the visited channel is complete: act on it for the current mode
   // Runs the declarations with scratch as the channel being visited (scratch lives on the caller's
   // stack: a channel's facts take RAM only while they are being used).
@@ -353,7 +374,7 @@ class Device : private DeviceState {
   void loseLink();
   void sendHello(bool reply);
   void drawNonce(uint32_t hubNonce);
-  static uint32_t mixNonce(uint32_t h, uint32_t v);
+  static uint32_t mixNonce(uint32_t h, uint32_t v) HUBWIRE_NOINLINE;
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
