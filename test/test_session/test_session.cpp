@@ -818,7 +818,8 @@ int main(int argc, char** argv) {
 // back as the same f32 the sketch declared.
 TEST(JsonNumbers, ReadBackAsTheSameFloat) {
   const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.25f, 0.7f, 0.1f, 3.3f, 5000.0f, 9.81f, 123456.789f,
-                          -32768.0f, 65535.0f, 4294967295.0f, 1e20f, -3.4028235e38f, 1e-3f, 2.5e-5f, 0.0001f};
+                          -32768.0f, 65535.0f, 4294967295.0f, 1e20f, -3.4028235e38f, 1e-3f, 2.5e-5f, 0.0001f,
+                          1e-14f, -1e-20f, 1.4e-45f};  // the last three print as 0 (six decimals)
   for (float v : values) {
     char buf[64] = {0};
     JsonWindow j(0, sizeof(buf) - 1, (uint8_t*)buf);

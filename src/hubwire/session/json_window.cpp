@@ -122,7 +122,9 @@ void JsonWindow::number(float v) {
     ip = shift < 24 ? mant >> shift : 0;
     frac = mant & ((1UL << shift) - 1);
   } else {
-    frac = mant >> (shift - 28);  // below 2^-4: keep 28 fraction bits, plenty for 6 decimals
+    // Below 2^-4: keep 28 fraction bits, plenty for 6 decimals. mant < 2^24, so from a shift of 24
+    // on nothing is left (and shifting a 32-bit value by 32 or more is undefined).
+    frac = shift - 28 < 24 ? mant >> (shift - 28) : 0;
     shift = 28;
   }
   char d[7];
