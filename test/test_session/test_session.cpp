@@ -643,6 +643,24 @@ TEST_F(Session, EventsAreRetriedWithTheSameSeqUntilAcked) {
   EXPECT_EQ(f[0].seq, (uint8_t)(first + 1));
 }
 
+// The hub may have delivered the event whose ACK was lost with the link: after the relink the same
+// event goes out with the same seq, so that the hub re-acks it instead of delivering it twice.
+TEST_F(Session, EventResentAfterARelinkKeepsItsSeq) {
+  link(77);
+  pump();
+  ASSERT_TRUE(device.emit(alarm, 5));
+  std::vector<uint8_t> seqs;
+  for (auto& f : pump())
+    if (f.type == '!') seqs.push_back(f.seq);
+  pump(1000);  // the hub went silent: link lost, event unacknowledged
+  ASSERT_FALSE(device.linked());
+  link(77);  // the same hub session comes back
+  for (auto& f : linkFrames)
+    if (f.type == '!') seqs.push_back(f.seq);
+  ASSERT_EQ(seqs.size(), 2u);
+  EXPECT_EQ(seqs[1], seqs[0]);
+}
+
 TEST_F(Session, EventsWaitForTheLinkAndTheQueueHasALimit) {
   drain(stream);
   for (int i = 0; i < HUBWIRE_EVENT_QUEUE; ++i) EXPECT_TRUE(device.emit(alarm, (uint16_t)i));

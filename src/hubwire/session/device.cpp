@@ -422,7 +422,8 @@ void Device::onHello(const Frame& f) {
   if (!linked_) {
     linked_ = true;
     beatSent_ = false;
-    eventInFlight_ = false;  // send the head event again right away
+    // Send the head event again right away, with its seq: the hub may have delivered it already.
+    eventSentAt_ = (uint16_t)(ms() - HUBWIRE_EVENT_RETRY_MS);
     if (onLinkUp_) onLinkUp_();
   }
 }
