@@ -18,7 +18,11 @@ Event<uint32_t> fourBytes;
 int32_t answer(int16_t v) { return v; }
 uint64_t wideAnswer() { return 0; }
 
+void setLevel(uint8_t) {}
+void changed() {}
+
 void declarations(Device& d) {
+  d.control("level", setLevel).range(1, 9).failsafe(1).unit("%").describe("a control's options");
   d.expose("fits", fits);
   d.expose("text", text);
   d.event("e", fourBytes);
@@ -35,5 +39,15 @@ void declarations(Device& d) {
   d.action("wide", wideAnswer);
 #elif HUBWIRE_CASE == 6
   d.expose("s", text).range(0, 1);  // strings have no range
+#elif HUBWIRE_CASE == 9
+  d.event("e2", fourBytes).writable();  // nothing to write into
+#elif HUBWIRE_CASE == 10
+  d.control("c", setLevel).streamable();  // nothing to read
+#elif HUBWIRE_CASE == 11
+  d.control("c", setLevel).onChange(changed);  // would replace the control's function
+#elif HUBWIRE_CASE == 12
+  d.action("a", answer).failsafe(0);  // calling an action on link loss is not a failsafe
+#elif HUBWIRE_CASE == 13
+  d.action("a", answer).writable();
 #endif
 }

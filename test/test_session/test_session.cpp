@@ -555,6 +555,72 @@ TEST_F(Session, SilenceLosesTheLinkAppliesFailsafesAndCallsTheHook) {
   EXPECT_EQ(upCalls, 2);
 }
 
+// A control with a failsafe value is called with it when the link is lost: a motor driven through a
+// function stops like one driven through a variable.
+uint8_t motor;
+int motorCalls;
+void setMotor(uint8_t v) {
+  motor = v;
+  ++motorCalls;
+}
+void motorDeclarations() { dut->control("motor", setMotor).failsafe(0); }
+
+TEST(Failsafe, ControlIsCalledWithItsFailsafeWhenTheLinkIsLost) {
+  FakeStream s;
+  FakeClock c;
+  Port p{s, c};
+  Device d{p};
+  dut = &d;
+  motorCalls = 0;
+  ASSERT_TRUE(d.begin("m", motorDeclarations));
+  sendFrame(s, '*', 0, 0, hubHello(5));
+  d.update();
+  ASSERT_TRUE(d.linked());
+  sendFrame(s, 'C', 1, 1, Bytes(1, 9));
+  d.update();
+  EXPECT_EQ(motor, 9);
+  c.now += 1000;  // silence: 4 x the hub's 250 ms heartbeat
+  d.update();
+  EXPECT_FALSE(d.linked());
+  EXPECT_EQ(motor, 0);
+  EXPECT_EQ(motorCalls, 2);
+}
+
+// A hub that accepts 16-byte payloads is never sent a longer one (PROTOCOL 1): reading or subscribing
+// to a 24-byte value is refused with BAD_LENGTH instead.
+float wide[6];
+void wideDeclarations() { dut->expose("wide", wide).streamable(); }
+
+TEST(PeerMaximum, ValuesLongerThanTheHubAcceptsAreRefused) {
+  FakeStream s;
+  FakeClock c;
+  Port p{s, c};
+  Device d{p};
+  dut = &d;
+  ASSERT_TRUE(d.begin("w", wideDeclarations));
+  Bytes hello = hubHello(5);
+  storeU16(&hello[6], 16);
+  sendFrame(s, '*', 0, 0, hello);
+  d.update();
+  ASSERT_TRUE(d.linked());
+  drain(s);
+  sendFrame(s, 'R', 1, 1);
+  sendFrame(s, 'S', 2, 1, le<uint16_t>(50));
+  d.update();
+  c.now += 100;
+  d.update();
+  std::vector<RxFrame> answers;
+  for (auto& f : drain(s)) {
+    EXPECT_LE(f.payload.size(), 16u) << f.type;
+    if (f.type != 'H') answers.push_back(f);
+  }
+  ASSERT_EQ(answers.size(), 2u);
+  for (auto& a : answers) {
+    EXPECT_EQ(a.type, kMsgNak);
+    EXPECT_EQ(a.payload, Bytes{kErrBadLength});
+  }
+}
+
 TEST_F(Session, LinkLossTimeoutFollowsTheHubsHeartbeat) {
   drain(stream);
   sendFrame(stream, '*', 0, 0, hubHello(3, 0, 1, 100));
@@ -737,6 +803,25 @@ TEST_F(Session, LongStreamIntervalsKeepTheirSchedule) {
     EXPECT_EQ(at, (std::vector<uint32_t>{0, step, (2 * interval + 99) / 100 * 100})) << interval;
     transact('S', kSpeed, le<uint16_t>(0));
   }
+}
+
+// Subscribing again changes the interval of the same subscription: its next sample still reports the
+// time since the previous one (PROTOCOL 3.7), and its seq goes on.
+TEST_F(Session, ResubscribingKeepsTheTimeSinceThePreviousSample) {
+  link();
+  pump();
+  transact('S', kSpeed, le<uint16_t>(50));  // a sample at once
+  std::vector<RxFrame> samples;
+  for (int ms = 0; ms < 60; ++ms)
+    for (auto& f : pump(1))
+      if (f.type == 'D') samples.push_back(f);
+  ASSERT_EQ(samples.size(), 1u);  // at 50 ms
+  transact('S', kSpeed, le<uint16_t>(20));  // at 60 ms: the next sample leaves at once
+  for (auto& f : others)
+    if (f.type == 'D') samples.push_back(f);
+  ASSERT_EQ(samples.size(), 2u);
+  EXPECT_EQ(loadU16(&samples[1].payload[0]), 10);
+  EXPECT_EQ(samples[1].seq, (uint8_t)(samples[0].seq + 1));
 }
 
 TEST_F(Session, SubscribeClampsChecksAndRunsOutOfSlots) {

@@ -115,10 +115,14 @@ void Device::finishChannel() {
       describeChannel();
       break;
     case kFailsafe:
-      if ((info_->flags & kHasFailsafe) && info_->data) {
+      if (!(info_->flags & kHasFailsafe)) break;
+      if (info_->data) {
         uint8_t n = info_->type.count ? info_->type.count : 1;
         uint8_t size = scalarSize(info_->type.code);
         for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_->data + i * size, &info_->failsafe, size);
+      } else {  // a control: called with the value, as if the hub had sent it
+        ScalarBits ignored;
+        info_->thunk(info_->fn, (const uint8_t*)&info_->failsafe, (uint8_t*)&ignored);
       }
       break;
     default:
@@ -475,7 +479,8 @@ void Device::onRequest(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
   if (!(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
-  if (f.len != 0) return sendNak(f, kErrBadLength);
+  // Not sent at all when the hub could not take it (its hello said how much it accepts).
+  if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
   reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
 }
 
@@ -525,9 +530,10 @@ void Device::onSubscribe(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
   if (!(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
-  if (f.len != 2) return sendNak(f, kErrBadLength);
+  if (f.len != 2 || ch.type.wireSize() + kSampleHeader > maxOut()) return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
+  uint16_t now = ms();
   Subscription* slot = nullptr;
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
     if (streams_[i].id == f.id) slot = &streams_[i];
@@ -540,6 +546,7 @@ void Device::onSubscribe(const Frame& f) {
         if (streams_[i].id == 0) slot = &streams_[i];
       if (!slot) return sendNak(f, kErrBusy);
       slot->seq = 0;
+      slot->last = now;  // a new subscription: its first sample reports the time since
     }
     if (interval < HUBWIRE_MIN_STREAM_INTERVAL_MS) interval = HUBWIRE_MIN_STREAM_INTERVAL_MS;
     // Elapsed times on the 16-bit clock are caught within 65,536 - interval ms of falling due:
@@ -547,8 +554,7 @@ void Device::onSubscribe(const Frame& f) {
     if (interval > kMaxStreamIntervalMs) interval = kMaxStreamIntervalMs;
     slot->id = f.id;
     slot->interval = interval;
-    slot->last = ms();
-    slot->start = (uint16_t)(slot->last - interval);  // the first sample is due now
+    slot->start = (uint16_t)(now - interval);  // the next sample is due now
   }
 #else
   if (interval != 0) return sendNak(f, kErrBusy);

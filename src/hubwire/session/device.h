@@ -214,21 +214,41 @@ class Device : private DeviceState {
   enum Flags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
 
   // Returned by every declaration; chain options onto it. T is the channel's scalar type (range
-  // and failsafe take values of it), or NotNumeric for strings, structs and events.
+  // and failsafe take values of it), or NotNumeric for strings, structs and events. Kind says what
+  // was declared: an option that makes no sense for it (an event made writable, a control given
+  // onChange) fails to compile with the reason, instead of misbehaving on the board.
   struct NotNumeric {};
-  template <typename T>
+  enum Kind : uint8_t { kVariable, kControl, kAction, kEvent };
+  template <typename T, Kind K = kVariable>
   class Builder {
    public:
-    Builder& writable() { return dev_.addAccess(kWritable), *this; }
-    Builder& streamable() { return dev_.addAccess(kStreamable), *this; }
-    // Writes outside [min, max] (any element of an array) are refused with NAK OUT_OF_RANGE.
-    Builder& range(T min, T max) { return dev_.setRange(bitsOf(min), bitsOf(max), &scalarOps<T>), *this; }
+    Builder& writable() {
+      static_assert(K == kVariable, "writable(): only a variable declared with expose() can be written by the hub");
+      return dev_.addAccess(kWritable), *this;
+    }
+    Builder& streamable() {
+      static_assert(K == kVariable, "streamable(): only a variable declared with expose() can be streamed");
+      return dev_.addAccess(kStreamable), *this;
+    }
+    // Writes (a control's or action's argument) outside [min, max], any element of an array, are
+    // refused with NAK OUT_OF_RANGE.
+    Builder& range(T min, T max) {
+      static_assert(K != kEvent, "range(): an event has no range (the sketch sets its value)");
+      return dev_.setRange(bitsOf(min), bitsOf(max), &scalarOps<T>), *this;
+    }
     Builder& unit(Text u) { return dev_.setText(0, u), *this; }
     Builder& describe(Text d) { return dev_.setText(1, d), *this; }
-    // The value (every element of an array) is set to this when the link is lost.
-    Builder& failsafe(T value) { return dev_.setFailsafe(bitsOf(value), &scalarOps<T>), *this; }
+    // When the link is lost the variable (every element of an array) is set to this, or the
+    // control's function is called with it.
+    Builder& failsafe(T value) {
+      static_assert(K == kVariable || K == kControl, "failsafe(): only a variable or a control has a failsafe value");
+      return dev_.setFailsafe(bitsOf(value), &scalarOps<T>), *this;
+    }
     // Called after the hub wrote a new value into the variable.
-    Builder& onChange(void (*fn)()) { return dev_.setChange(fn), *this; }
+    Builder& onChange(void (*fn)()) {
+      static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
+      return dev_.setChange(fn), *this;
+    }
 
    private:
     friend class Device;
@@ -268,40 +288,40 @@ class Device : private DeviceState {
 
   // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
   template <typename T>
-  Builder<T> control(Text name, void (*fn)(T)) {
+  Builder<T, kControl> control(Text name, void (*fn)(T)) {
     checkValue<T, sizeof(T)>();
     return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callVoid<T>);
   }
   template <typename T>
-  Builder<T> control(Text name, bool (*fn)(T)) {
+  Builder<T, kControl> control(Text name, bool (*fn)(T)) {
     checkValue<T, sizeof(T)>();
     return declareCall(name, kWritable, TypeOf<T>::code, kVoid, (void (*)())fn, &callChecked<T>);
   }
 
   // A callable action: the hub calls fn with an argument and gets its return value.
   template <typename R, typename A>
-  Builder<A> action(Text name, R (*fn)(A)) {
+  Builder<A, kAction> action(Text name, R (*fn)(A)) {
     checkValue<A, sizeof(A)>();
     checkReturn<R>();
     return declareCall(name, kCallable, TypeOf<A>::code, TypeOf<R>::code, (void (*)())fn, &callRet<R, A>);
   }
   template <typename A>
-  Builder<A> action(Text name, void (*fn)(A)) {
+  Builder<A, kAction> action(Text name, void (*fn)(A)) {
     checkValue<A, sizeof(A)>();
     return declareCall(name, kCallable, TypeOf<A>::code, kVoid, (void (*)())fn, &callVoid<A>);
   }
   template <typename R>
-  Builder<NotNumeric> action(Text name, R (*fn)()) {
+  Builder<NotNumeric, kAction> action(Text name, R (*fn)()) {
     checkReturn<R>();
     return declareCall(name, kCallable, kVoid, TypeOf<R>::code, (void (*)())fn, &callNoArg<R>);
   }
-  Builder<NotNumeric> action(Text name, void (*fn)()) {
+  Builder<NotNumeric, kAction> action(Text name, void (*fn)()) {
     return declareCall(name, kCallable, kVoid, kVoid, fn, &callPlain);
   }
 
   // An event the sketch emits; the hub is told exactly once.
   template <typename T>
-  Builder<NotNumeric> event(Text name, Event<T>& ev) {
+  Builder<NotNumeric, kEvent> event(Text name, Event<T>& ev) {
     checkValue<T, sizeof(T)>();
     static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
     declare(name, nullptr, TypeOf<T>::code, 0, sizeof(T), kEventAccess);
