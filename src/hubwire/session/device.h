@@ -197,7 +197,7 @@ struct DeviceState {
 
   // Subscriptions (id 0 = free slot).
   // Times are the low 16 bits of millis(). Only elapsed times are compared (now - start, unsigned),
-  // so every interval up to 65,535 ms works; a due time compared as signed would not past 32.8 s.
+  // so intervals past 32.8 s work (up to the 60 s granted); a due time compared as signed would not.
   struct Subscription {
     uint8_t id, seq;
     uint16_t interval;
