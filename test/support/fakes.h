@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hubwire/port.h"
+#include "hubwire/wire/bytes.h"
 #include "hubwire/wire/frame.h"
 
 namespace hubwire {
@@ -68,6 +69,17 @@ inline std::vector<RxFrame> drain(FakeStream& s, LinkCounters* counters = nullpt
   if (counters) *counters = rx.counters;
   s.out.clear();
   return frames;
+}
+
+// A hub's hello (PROTOCOL 3.1): it accepts 255-byte payloads and beats every `beat` ms.
+inline Bytes hubHello(uint32_t nonce, uint8_t flags = 0, uint8_t version = 1, uint16_t beat = 250) {
+  Bytes p(16, 0);
+  p[0] = version;
+  p[1] = flags;
+  storeU32(&p[2], nonce);
+  storeU16(&p[6], 255);
+  storeU16(&p[8], beat);
+  return p;
 }
 
 inline void sendFrame(FakeStream& s, uint8_t type, uint8_t seq, uint8_t id, const Bytes& payload = Bytes()) {

@@ -5,7 +5,6 @@
 
 #include "fakes.h"
 #include "hubwire/session/device.h"
-#include "hubwire/wire/bytes.h"
 
 #if HUBWIRE_MAX_STREAMS != 0 || HUBWIRE_MAX_CHANNELS != 254
 #error "test_limits is built with -DHUBWIRE_MAX_STREAMS=0 -DHUBWIRE_MAX_CHANNELS=254"
@@ -35,15 +34,10 @@ class Limits : public ::testing::Test {
     declaredCount = 1;
   }
 
-  // Starts the session with a hub whose heartbeat interval is beatMs.
-  void link(uint16_t beatMs = 250) {
+  // Starts the session with a hub.
+  void link() {
     ASSERT_TRUE(device.begin("limits", declarations));
-    Bytes hello(16, 0);
-    hello[0] = kProtocolVersion;
-    storeU32(&hello[2], 99);
-    storeU16(&hello[6], 255);
-    storeU16(&hello[8], beatMs);
-    sendFrame(stream, '*', 0, 0, hello);
+    sendFrame(stream, '*', 0, 0, hubHello(99));
     device.update();
     drain(stream);
     ASSERT_TRUE(device.linked());

@@ -76,16 +76,6 @@ uint32_t fnv(const std::string& s) {
   return h;
 }
 
-Bytes hubHello(uint32_t nonce, uint8_t flags = 0, uint8_t version = 1, uint16_t beat = 250) {
-  Bytes p(16, 0);
-  p[0] = version;
-  p[1] = flags;
-  storeU32(&p[2], nonce);
-  storeU16(&p[6], 255);
-  storeU16(&p[8], beat);
-  return p;
-}
-
 class Session : public ::testing::Test {
  protected:
   FakeStream stream;
@@ -191,16 +181,25 @@ TEST_F(Session, RepeatsAnnouncementWhileUnlinked) {
   EXPECT_EQ(f[0].type, '*');
 }
 
-// One boot of the test sketch with the same seed every time, as a board that cannot tell boots apart.
+// One boot of a sketch (the test sketch unless told) with the same seed every time, as a board that
+// cannot tell boots apart.
 struct Boot {
   FakeStream stream;
   FakeClock clock;
   Port port{stream, clock};
   Device device{port};
   bool begun;
-  Boot() {
+  explicit Boot(void (*sketch)() = declarations) {
     dut = &device;
-    begun = device.begin("tester", declarations, "2.1", 0x1234);
+    begun = device.begin("tester", sketch, "2.1", 0x1234);
+  }
+  // Handshakes with a hub that accepts payloads of up to hubMax bytes; true when linked.
+  bool link(uint16_t hubMax = 255) {
+    Bytes hello = hubHello(5);
+    storeU16(&hello[6], hubMax);
+    sendFrame(stream, '*', 0, 0, hello);
+    device.update();
+    return device.linked();
   }
 };
 
@@ -566,16 +565,13 @@ void setMotor(uint8_t v) {
 void motorDeclarations() { dut->control("motor", setMotor).failsafe(0); }
 
 TEST(Failsafe, ControlIsCalledWithItsFailsafeWhenTheLinkIsLost) {
-  FakeStream s;
-  FakeClock c;
-  Port p{s, c};
-  Device d{p};
-  dut = &d;
   motorCalls = 0;
-  ASSERT_TRUE(d.begin("m", motorDeclarations));
-  sendFrame(s, '*', 0, 0, hubHello(5));
-  d.update();
-  ASSERT_TRUE(d.linked());
+  Boot b(motorDeclarations);
+  ASSERT_TRUE(b.begun);
+  ASSERT_TRUE(b.link());
+  FakeStream& s = b.stream;
+  FakeClock& c = b.clock;
+  Device& d = b.device;
   sendFrame(s, 'C', 1, 1, Bytes(1, 9));
   d.update();
   EXPECT_EQ(motor, 9);
@@ -592,17 +588,12 @@ float wide[6];
 void wideDeclarations() { dut->expose("wide", wide).streamable(); }
 
 TEST(PeerMaximum, ValuesLongerThanTheHubAcceptsAreRefused) {
-  FakeStream s;
-  FakeClock c;
-  Port p{s, c};
-  Device d{p};
-  dut = &d;
-  ASSERT_TRUE(d.begin("w", wideDeclarations));
-  Bytes hello = hubHello(5);
-  storeU16(&hello[6], 16);
-  sendFrame(s, '*', 0, 0, hello);
-  d.update();
-  ASSERT_TRUE(d.linked());
+  Boot b(wideDeclarations);
+  ASSERT_TRUE(b.begun);
+  ASSERT_TRUE(b.link(16));
+  FakeStream& s = b.stream;
+  FakeClock& c = b.clock;
+  Device& d = b.device;
   drain(s);
   sendFrame(s, 'R', 1, 1);
   sendFrame(s, 'S', 2, 1, le<uint16_t>(50));
