@@ -37,9 +37,9 @@ namespace hubwire {
 // The core's seam bound to an Arduino Stream and millis() (functions in HubwireArduino.cpp).
 class Port {
  public:
-  explicit Port(Stream& s) : stream(s), reportsRoom(false) {}
+  explicit Port(Stream& s) : stream(s), mostRoom(0) {}
   Stream& stream;
-  bool reportsRoom;  // availableForWrite() has ever said something other than 0
+  uint8_t mostRoom;  // the most availableForWrite() has reported (255 and more count as 255)
 };
 
 // Seeds the session nonce: differs between resets (a counter that survives them) and, where the

@@ -8,9 +8,12 @@ int portRead(Port& p) { return p.stream.read(); }
 void portWrite(Port& p, const uint8_t* data, size_t len) { p.stream.write(data, len); }
 size_t portWritable(Port& p) {
   int n = p.stream.availableForWrite();
-  if (n > 0) p.reportsRoom = true;
-  // Some cores never implement availableForWrite() (always 0): then we cannot know, so go ahead.
-  return p.reportsRoom ? (size_t)n : (size_t)0xFFFF;
+  // A transmit buffer as empty as it has ever been will not get emptier: a frame larger than the
+  // whole buffer goes now (write() waits for the rest) instead of never. The same rule lets frames
+  // go on cores that never implement availableForWrite() (always 0), where room is unknown.
+  if (n < p.mostRoom) return (size_t)n;
+  p.mostRoom = (uint8_t)(n > 255 ? 255 : n);
+  return 0xFFFF;
 }
 uint32_t portMillis(Port&) { return ::millis(); }
 uint32_t portMicros(Port&) { return ::micros(); }

@@ -17,7 +17,8 @@ class Port;  // defined by the binding
 int portRead(Port& port);
 // Queue bytes for sending.
 void portWrite(Port& port, const uint8_t* data, size_t len);
-// Bytes that can be written now without blocking; a large number when unknown.
+// Bytes that can be written now without blocking; a large number when unknown, or when waiting
+// cannot make more room (the transmit buffer is as empty as it gets).
 size_t portWritable(Port& port);
 // Milliseconds since some fixed point; wraps at 2^32.
 uint32_t portMillis(Port& port);
