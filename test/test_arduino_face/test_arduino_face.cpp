@@ -7,10 +7,11 @@
 #include <vector>
 
 #include "Hubwire.h"
-#include "hubwire/wire/bytes.h"
-#include "hubwire/wire/frame.h"
+#include "frames.h"
 
 namespace {
+
+using namespace hubwire::test;
 
 uint32_t nowMs = 1000;
 
@@ -53,20 +54,10 @@ uint16_t level = 7;
 Hubwire* dut;
 void channels() { dut->expose(F("level"), level).streamable(); }
 
-void sendFrame(BufferedSerial& s, uint8_t type, uint8_t seq, uint8_t id, const std::vector<uint8_t>& payload) {
-  uint8_t raw[300];
-  size_t n = hubwire::encodeFrame(type, seq, id, payload.data(), (uint8_t)payload.size(), raw);
-  s.in.insert(s.in.end(), raw, raw + n);
-}
-
 // The frame types the device wrote since the last call.
 std::vector<uint8_t> sentTypes(BufferedSerial& s) {
-  static uint8_t buf[HUBWIRE_RAW_FRAME_SIZE(255)];
-  hubwire::FrameReceiver rx(buf, sizeof(buf));
   std::vector<uint8_t> types;
-  for (uint8_t b : s.out)
-    if (rx.feed(b)) types.push_back(rx.frame().type);
-  s.out.clear();
+  for (const RxFrame& f : drain(s)) types.push_back(f.type);
   return types;
 }
 
@@ -80,12 +71,7 @@ size_t count(const std::vector<uint8_t>& types, uint8_t type) {
 void linkAndSubscribe(Hubwire& hub, BufferedSerial& serial) {
   dut = &hub;
   ASSERT_TRUE(hub.begin(F("face"), channels));
-  std::vector<uint8_t> hello(16, 0);
-  hello[0] = 1;
-  hubwire::storeU32(&hello[2], 42);
-  hubwire::storeU16(&hello[6], 255);
-  hubwire::storeU16(&hello[8], 250);
-  sendFrame(serial, '*', 0, 0, hello);
+  sendFrame(serial, '*', 0, 0, hubHello(42));
   hub.update();
   ASSERT_TRUE(hub.linked());
   sendFrame(serial, 'S', 1, 1, {10, 0});
