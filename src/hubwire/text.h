@@ -17,10 +17,10 @@ struct Text {
   const char* ptr;
   bool flash;
 
-  Text() : ptr(nullptr), flash(false) {}
-  Text(const char* s) : ptr(s), flash(false) {}  // NOLINT: implicit on purpose
+  constexpr Text() : ptr(nullptr), flash(false) {}
+  constexpr Text(const char* s) : ptr(s), flash(false) {}  // NOLINT: implicit on purpose
   Text(const __FlashStringHelper* s) : ptr(reinterpret_cast<const char*>(s)), flash(true) {}  // NOLINT
-  Text(const char* s, bool inFlash) : ptr(s), flash(inFlash) {}
+  constexpr Text(const char* s, bool inFlash) : ptr(s), flash(inFlash) {}
 
   char at(uint16_t i) const {
 #if defined(__AVR__)

@@ -1,0 +1,148 @@
+// What the session knows about a channel at run time: one ChannelInfo per channel, a constant in
+// flash that the compiler worked out from the sketch's declarations (declare.h). A channel costs
+// no RAM; the session copies its record onto the stack while it handles a frame for it.
+#ifndef HUBWIRE_CHANNELS_CHANNEL_H
+#define HUBWIRE_CHANNELS_CHANNEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "../config.h"
+#include "../text.h"
+#include "../wire/types.h"
+
+namespace hubwire {
+
+enum Access : uint8_t { kReadable = 1, kWritable = 2, kCallable = 4, kEventAccess = 8, kStreamable = 16 };
+enum ChannelFlags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
+
+// A declared event: keep one per event (a global), emit with Device::emit().
+template <typename T>
+struct Event {
+  uint8_t id;  // set by begin()
+};
+
+// Calls the function a control or action declared, with a typed argument and return value, both as
+// little-endian bytes. call points to that function's pointer, kept in flash with its own type.
+// Returns false when the function refused the value (controls returning bool).
+typedef bool (*Thunk)(const void* call, const uint8_t* arg, uint8_t* ret);
+
+template <typename F>
+F functionAt(const void* call) {
+  F f;
+#if defined(__AVR__)
+  memcpy_P(&f, call, sizeof(f));
+#else
+  memcpy(&f, call, sizeof(f));
+#endif
+  return f;
+}
+template <typename T>
+bool callVoid(const void* call, const uint8_t* arg, uint8_t*) {
+  T a;
+  memcpy(&a, arg, sizeof(T));
+  functionAt<void (*)(T)>(call)(a);
+  return true;
+}
+template <typename T>
+bool callChecked(const void* call, const uint8_t* arg, uint8_t*) {
+  T a;
+  memcpy(&a, arg, sizeof(T));
+  return functionAt<bool (*)(T)>(call)(a);
+}
+template <typename R, typename A>
+bool callRet(const void* call, const uint8_t* arg, uint8_t* ret) {
+  A a;
+  memcpy(&a, arg, sizeof(A));
+  R r = functionAt<R (*)(A)>(call)(a);
+  memcpy(ret, &r, sizeof(R));
+  return true;
+}
+template <typename R>
+bool callNoArg(const void* call, const uint8_t*, uint8_t* ret) {
+  R r = functionAt<R (*)()>(call)();
+  memcpy(ret, &r, sizeof(R));
+  return true;
+}
+inline bool callPlain(const void* call, const uint8_t*, uint8_t*) {
+  functionAt<void (*)()>(call)();
+  return true;
+}
+
+// One scalar of the channel's own type (a range limit or a failsafe value), its bytes at the start
+// (little-endian, config.h): integers are stored widened, floats as themselves.
+#if HUBWIRE_HAS_F64
+typedef uint64_t ScalarBits;
+#else
+typedef uint32_t ScalarBits;
+#endif
+union Scalar {
+  struct Bits {};
+  constexpr Scalar() : bits(0) {}
+  constexpr Scalar(Bits, ScalarBits b) : bits(b) {}
+  constexpr Scalar(float v) : f32(v) {}  // NOLINT
+#if HUBWIRE_HAS_F64
+  constexpr Scalar(double v) : f64(v) {}  // NOLINT
+#endif
+  ScalarBits bits;
+  float f32;
+#if HUBWIRE_HAS_F64
+  double f64;
+#endif
+};
+template <typename T>
+struct ToScalar {
+  static constexpr Scalar of(T v) { return Scalar(Scalar::Bits(), (ScalarBits)(int64_t)v); }
+};
+template <>
+struct ToScalar<float> {
+  static constexpr Scalar of(float v) { return Scalar(v); }
+};
+template <>
+struct ToScalar<double> {
+#if HUBWIRE_HAS_F64
+  static constexpr Scalar of(double v) { return Scalar(v); }
+#else
+  static constexpr Scalar of(double v) { return Scalar((float)v); }  // double is float here
+#endif
+};
+
+// Is the value at v (the channel's type) within [*lo, *hi]? Instantiated only for types given a
+// range or failsafe: a sketch without float ranges links no float comparison.
+typedef bool (*InRange)(const void* v, const Scalar* lo, const Scalar* hi);
+template <typename T>
+bool inRange(const void* v, const Scalar* lo, const Scalar* hi) {
+  T x, a, b;
+  memcpy(&x, v, sizeof(T));
+  memcpy(&a, lo, sizeof(T));
+  memcpy(&b, hi, sizeof(T));
+  return x >= a && x <= b;  // NaN fails
+}
+
+struct ChannelInfo {
+  ValueType type;    // value, call argument, or event value
+  TypeCode ret;      // callables: return value (a scalar)
+  void* data;        // the variable behind a readable/writable channel
+  void (*change)();  // called after the hub wrote the variable
+  const void* call;  // controls and actions: the function, kept in flash (see Thunk)
+  Thunk thunk;       // how to call it
+  InRange inRange;   // range / failsafe: their type's comparison
+  Scalar min, max, failsafe;
+  uint8_t access;
+  uint8_t flags;
+  uint8_t* eventId;  // events: the handle's id, set by begin()
+};
+
+// A sketch's declarations as begin() takes them (HUBWIRE_CHANNELS): the descriptor JSON and one
+// record per channel, all in flash.
+struct ChannelTable {
+  const char* json;
+  uint16_t jsonLength;
+  const ChannelInfo* channels;
+  uint8_t count;
+};
+
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,490 @@
+// Channel declarations the compiler works out: a sketch lists its channels once, at file scope,
+//
+//   HUBWIRE_CHANNELS(channels, "rover",
+//     expose("speed", speed).writable().range(-1.0f, 1.0f).unit("m/s").failsafe(0.0f),
+//     control("led", setLed),
+//     event("bumper", bumper));
+//
+// and gets, as constants in flash, the descriptor JSON (docs/PROTOCOL.md 7) and one record per
+// channel (channel.h) that the session reads when the hub addresses the channel. Nothing is built
+// or checked on the board: a declaration that cannot work fails to compile, saying why.
+#ifndef HUBWIRE_CHANNELS_DECLARE_H
+#define HUBWIRE_CHANNELS_DECLARE_H
+
+#include "../config.h"
+#include "../session/protocol.h"
+#include "../wire/types.h"
+#include "channel.h"
+#include "constexpr_text.h"
+
+namespace hubwire {
+namespace declare {
+
+// The value a range or failsafe takes: the channel's scalar type, or NotNumeric where none applies.
+struct NotNumeric {
+  constexpr NotNumeric() {}
+};
+struct StructValue : NotNumeric {  // marks a struct channel: its layout text is copied to flash
+  constexpr StructValue() {}
+};
+
+enum Kind : uint8_t { kVariable, kControl, kAction, kEvent };
+
+// A range's or failsafe's value as stored, and the comparison the session uses for it.
+template <typename T>
+struct Limits {
+  static constexpr Scalar of(T v) { return ToScalar<T>::of(v); }
+  static constexpr InRange inRange(uint8_t flags) { return flags & (kHasRange | kHasFailsafe) ? &hubwire::inRange<T> : nullptr; }
+};
+template <>
+struct Limits<NotNumeric> {
+  static constexpr Scalar of(NotNumeric) { return Scalar(); }
+  static constexpr InRange inRange(uint8_t) { return nullptr; }
+};
+template <>
+struct Limits<StructValue> : Limits<NotNumeric> {};
+
+// ---- JSON pieces: a literal prefix, one value, a literal suffix ----
+enum PieceKind : uint8_t { kNone, kInteger, kFloat, kEscaped, kLiteral, kAccessLetters, kFields };
+
+struct Piece {
+  const char* pre;
+  PieceKind kind;
+  int64_t integer;  // kInteger; kAccessLetters: the access bits
+  float real;       // kFloat
+  const char* text;  // kEscaped, kLiteral, kFields (the layout text)
+  const char* post;
+};
+constexpr Piece literal(const char* s) { return Piece{s, kNone, 0, 0, "", ""}; }
+constexpr Piece integer(const char* pre, int64_t v) { return Piece{pre, kInteger, v, 0, "", ""}; }
+constexpr Piece quoted(const char* pre, const char* s) { return Piece{pre, kEscaped, 0, 0, s, "\""}; }
+constexpr Piece typeNamed(const char* pre, TypeCode t);
+constexpr Piece empty() { return literal(""); }
+
+// Numbers: integers as themselves, floats (and doubles, as floats) through constexpr_text.h.
+template <typename T>
+constexpr Piece number(const char* pre, T v) {
+  return integer(pre, (int64_t)v);
+}
+constexpr Piece number(const char* pre, float v) { return Piece{pre, kFloat, 0, v, "", ""}; }
+constexpr Piece number(const char* pre, double v) { return Piece{pre, kFloat, 0, (float)v, "", ""}; }
+constexpr Piece number(const char*, NotNumeric) { return empty(); }
+constexpr Piece number(const char*, StructValue) { return empty(); }
+
+constexpr const char* typeNameOf(TypeCode t) {
+  return t == kBool ? "bool" : t == kU8 ? "u8" : t == kI8 ? "i8" : t == kU16 ? "u16" : t == kI16 ? "i16"
+       : t == kU32 ? "u32" : t == kI32 ? "i32" : t == kF32 ? "f32" : t == kF64 ? "f64" : t == kStr ? "str"
+       : t == kStruct ? "struct" : "void";
+}
+constexpr Piece typeNamed(const char* pre, TypeCode t) { return Piece{pre, kLiteral, 0, 0, typeNameOf(t), "\""}; }
+
+// Access letters in the descriptor's order: r w c e s (the bits of Access, lowest first).
+constexpr size_t accessLength(int64_t a) { return a ? (a & 1) + accessLength(a >> 1) : 0; }
+constexpr char accessAt(int64_t a, size_t i, size_t bit = 0) {
+  return (a & 1) ? (i == 0 ? "rwces"[bit] : accessAt(a >> 1, i - 1, bit + 1)) : accessAt(a >> 1, i, bit + 1);
+}
+
+// A struct layout "ax:f32,gyro:i16[3]" becomes {"n":"ax","t":"f32"},{"n":"gyro","t":"i16","c":3}:
+// each character of the layout stands for a short run of JSON.
+constexpr bool fieldStart(const char* s, size_t j) { return j == 0 || s[j - 1] == ','; }
+constexpr const char* fieldRun(const char* s, size_t j) {  // what goes before the character itself
+  return s[j] == ':' ? "\",\"t\":\"" : s[j] == '[' ? "\",\"c\":" : s[j] == ']' ? "}" : s[j] == ',' ? (s[j - 1] == ']' ? "," : "\"},")
+       : fieldStart(s, j) ? "{\"n\":\"" : "";
+}
+constexpr bool fieldKeepsChar(char c) { return c != ':' && c != '[' && c != ']' && c != ','; }
+constexpr size_t fieldLength(const char* s, size_t j) { return cx::length(fieldRun(s, j)) + (fieldKeepsChar(s[j]) ? 1 : 0); }
+constexpr const char* fieldsEnd(const char* s, size_t n) { return n && s[n - 1] == ']' ? "" : "\"}"; }
+constexpr size_t fieldsLength(const char* s, size_t j = 0) {
+  return s[j] ? fieldLength(s, j) + fieldsLength(s, j + 1) : cx::length(fieldsEnd(s, j));
+}
+constexpr char fieldsAt(const char* s, size_t i, size_t j = 0) {
+  return !s[j] ? fieldsEnd(s, j)[i]
+       : i < fieldLength(s, j) ? (i < cx::length(fieldRun(s, j)) ? fieldRun(s, j)[i] : s[j])
+                               : fieldsAt(s, i - fieldLength(s, j), j + 1);
+}
+
+constexpr size_t valueLength(const Piece& p) {
+  return p.kind == kInteger ? cx::integerLength(p.integer) : p.kind == kFloat ? cx::floatLength(p.real)
+       : p.kind == kEscaped ? cx::escapedLength(p.text) : p.kind == kLiteral ? cx::length(p.text)
+       : p.kind == kAccessLetters ? accessLength(p.integer) : p.kind == kFields ? fieldsLength(p.text) : 0;
+}
+constexpr char valueAt(const Piece& p, size_t i) {
+  return p.kind == kInteger ? cx::integerAt(p.integer, i) : p.kind == kFloat ? cx::floatAt(p.real, i)
+       : p.kind == kEscaped ? cx::escapedAt(p.text, i) : p.kind == kLiteral ? p.text[i]
+       : p.kind == kAccessLetters ? accessAt(p.integer, i) : fieldsAt(p.text, i);
+}
+constexpr size_t pieceLength(const Piece& p) { return cx::length(p.pre) + valueLength(p) + cx::length(p.post); }
+constexpr char pieceAt(const Piece& p, size_t i) {
+  return i < cx::length(p.pre) ? p.pre[i]
+       : i < cx::length(p.pre) + valueLength(p) ? valueAt(p, i - cx::length(p.pre))
+                                                : p.post[i - cx::length(p.pre) - valueLength(p)];
+}
+
+// ---- one declaration ----
+const uint8_t kPiecesPerChannel = 13;
+
+// T: the scalar type a range or failsafe takes (NotNumeric if none). K: what was declared. Call:
+// the type of the function a control or action calls, kept as itself (a constant expression cannot
+// cast it to a common type) and copied to flash, where its thunk reads it.
+template <typename T, Kind K, typename Call = void (*)()>
+class Decl {
+ public:
+  // Readable by the hub; writes it sends are stored in the variable.
+  constexpr Decl writable() const {
+    static_assert(K == kVariable, "writable(): only a variable declared with expose() can be written by the hub");
+    return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, change_);
+  }
+  constexpr Decl streamable() const {
+    static_assert(K == kVariable, "streamable(): only a variable declared with expose() can be streamed");
+    return Decl(*this, unit_, description_, (uint8_t)(access_ | kStreamable), flags_, lo_, hi_, failsafe_, change_);
+  }
+  // Writes (a control's or action's argument) outside [min, max], any element of an array, are
+  // refused with NAK OUT_OF_RANGE.
+  constexpr Decl range(T min, T max) const {
+    static_assert(K != kEvent, "range(): an event has no range (the sketch sets its value)");
+    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kHasRange), min, max, failsafe_, change_);
+  }
+  constexpr Decl unit(const char* u) const {
+    return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, change_);
+  }
+  constexpr Decl describe(const char* d) const {
+    return Decl(*this, unit_, d, access_, flags_, lo_, hi_, failsafe_, change_);
+  }
+  // When the link is lost the variable (every element of an array) is set to this, or the
+  // control's function is called with it.
+  constexpr Decl failsafe(T value) const {
+    static_assert(K == kVariable || K == kControl, "failsafe(): only a variable or a control has a failsafe value");
+    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kHasFailsafe), lo_, hi_, value, change_);
+  }
+  // Called after the hub wrote a new value into the variable.
+  constexpr Decl onChange(void (*fn)()) const {
+    static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
+    return Decl(*this, unit_, description_, access_, flags_, lo_, hi_, failsafe_, fn);
+  }
+
+  // Everything below is for HUBWIRE_CHANNELS.
+  constexpr Decl(const char* name, const char* layout, void* data, uint8_t* eventId, TypeCode code, uint8_t count,
+                 TypeCode ret, uint8_t access, Call call, Thunk thunk)
+      : name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data), eventId_(eventId),
+        change_(nullptr), call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
+        flags_(0), lo_(), hi_(), failsafe_() {}
+
+  // The k-th piece of this channel's JSON, as channel id.
+  constexpr Piece piece(uint8_t k, uint8_t id) const {
+    return k == 0 ? integer(id > 1 ? ",{\"id\":" : "{\"id\":", id)
+         : k == 1 ? quoted(",\"n\":\"", name_)
+         : k == 2 ? Piece{",\"a\":\"", kAccessLetters, access_, 0, "", "\""}
+         : k == 3 ? typeNamed(",\"t\":\"", code_)
+         : k == 4 ? (count_ ? integer(",\"c\":", count_) : empty())
+         : k == 5 ? (layout_ ? Piece{",\"f\":[", kFields, 0, 0, layout_, "]"} : empty())
+         : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", ret_) : empty())
+         : k == 7 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
+         : k == 8 ? (flags_ & kHasRange ? number(",\"min\":", lo_) : empty())
+         : k == 9 ? (flags_ & kHasRange ? number(",\"max\":", hi_) : empty())
+         : k == 10 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
+         : k == 11 ? (description_ ? quoted(",\"d\":\"", description_) : empty())
+                   : literal("}");
+  }
+  constexpr size_t jsonLength(uint8_t id, uint8_t k = 0) const {
+    return k == kPiecesPerChannel ? 0 : pieceLength(piece(k, id)) + jsonLength(id, (uint8_t)(k + 1));
+  }
+  constexpr char jsonAt(uint8_t id, size_t i, uint8_t k = 0) const {
+    return i < pieceLength(piece(k, id)) ? pieceAt(piece(k, id), i)
+                                         : jsonAt(id, i - pieceLength(piece(k, id)), (uint8_t)(k + 1));
+  }
+  // What the session needs at run time. layout: the flash copy of a struct's layout text, structs
+  // its codec (named only for structs: a sketch without them links none); call: the flash copy of
+  // the function a control or action calls.
+  constexpr ChannelInfo info(const char* layout, StructCodec structs, const void* call) const {
+    return ChannelInfo{ValueType{code_, count_, Text(layout, true), structs},
+                       ret_, data_, change_, call, thunk_, Limits<T>::inRange(flags_),
+                       Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_), access_, flags_, eventId_};
+  }
+  constexpr const char* layout() const { return layout_; }
+  constexpr const char* name() const { return name_; }
+  constexpr Call call() const { return call_; }
+
+ private:
+  constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
+                 T failsafe, void (*change)())
+      : name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
+        eventId_(d.eventId_), change_(change), call_(d.call_), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
+        ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
+
+  const char* name_;
+  const char* layout_;
+  const char* unit_;
+  const char* description_;
+  void* data_;
+  uint8_t* eventId_;
+  void (*change_)();
+  Call call_;
+  Thunk thunk_;
+  TypeCode code_;
+  uint8_t count_;
+  TypeCode ret_;
+  uint8_t access_;
+  uint8_t flags_;
+  T lo_, hi_, failsafe_;
+};
+
+// ---- the declarations ----
+template <typename T, size_t Bytes>
+constexpr bool checkValue() {
+  static_assert(TypeOf<T>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+  static_assert(Bytes + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "value larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  return true;
+}
+template <typename R>
+constexpr bool checkReturn() {
+  static_assert(TypeOf<R>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+  static_assert(sizeof(R) <= HUBWIRE_MAX_RETURN, "return value larger than HUBWIRE_MAX_RETURN: raise it");
+  return true;
+}
+
+// A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
+template <typename T>
+constexpr Decl<T, kVariable> expose(const char* name, T& var) {
+  return checkValue<T, sizeof(T)>(), Decl<T, kVariable>(name, nullptr, &var, nullptr, TypeOf<T>::code, 0, kVoid, kReadable, nullptr, nullptr);
+}
+template <typename T, size_t N>
+constexpr Decl<T, kVariable> expose(const char* name, T (&arr)[N]) {
+  static_assert(N <= 255, "arrays hold at most 255 elements");
+  return checkValue<T, sizeof(arr)>(), Decl<T, kVariable>(name, nullptr, arr, nullptr, TypeOf<T>::code, (uint8_t)N, kVoid, kReadable, nullptr, nullptr);
+}
+template <size_t N>
+constexpr Decl<NotNumeric, kVariable> expose(const char* name, char (&str)[N]) {
+  static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
+  static_assert(N + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "string longer than HUBWIRE_MAX_PAYLOAD - 3: raise it");
+  return Decl<NotNumeric, kVariable>(name, nullptr, str, nullptr, kStr, (uint8_t)(N - 1), kVoid, kReadable, nullptr, nullptr);
+}
+// A struct with named fields, laid out by text such as "ax:f32,ay:f32,gyro:i16[3]".
+template <typename T>
+constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const char* layout) {
+  static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  return Decl<StructValue, kVariable>(name, layout, &var, nullptr, kStruct, 0, kVoid, kReadable, nullptr, nullptr);
+}
+
+// A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
+template <typename T>
+constexpr Decl<T, kControl, void (*)(T)> control(const char* name, void (*fn)(T)) {
+  return checkValue<T, sizeof(T)>(), Decl<T, kControl, void (*)(T)>(name, nullptr, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callVoid<T>);
+}
+template <typename T>
+constexpr Decl<T, kControl, bool (*)(T)> control(const char* name, bool (*fn)(T)) {
+  return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
+}
+
+// A callable action: the hub calls fn with an argument and gets its return value.
+template <typename R, typename A>
+constexpr Decl<A, kAction, R (*)(A)> action(const char* name, R (*fn)(A)) {
+  return checkValue<A, sizeof(A)>(), checkReturn<R>(),
+         Decl<A, kAction, R (*)(A)>(name, nullptr, nullptr, nullptr, TypeOf<A>::code, 0, TypeOf<R>::code, kCallable, fn, &callRet<R, A>);
+}
+template <typename A>
+constexpr Decl<A, kAction, void (*)(A)> action(const char* name, void (*fn)(A)) {
+  return checkValue<A, sizeof(A)>(), Decl<A, kAction, void (*)(A)>(name, nullptr, nullptr, nullptr, TypeOf<A>::code, 0, kVoid, kCallable, fn, &callVoid<A>);
+}
+template <typename R>
+constexpr Decl<NotNumeric, kAction, R (*)()> action(const char* name, R (*fn)()) {
+  return checkReturn<R>(), Decl<NotNumeric, kAction, R (*)()>(name, nullptr, nullptr, nullptr, kVoid, 0, TypeOf<R>::code, kCallable, fn, &callNoArg<R>);
+}
+constexpr Decl<NotNumeric, kAction> action(const char* name, void (*fn)()) {
+  return Decl<NotNumeric, kAction>(name, nullptr, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
+}
+
+// An event the sketch emits with emit(); the hub is told exactly once.
+template <typename T>
+constexpr Decl<NotNumeric, kEvent> event(const char* name, Event<T>& ev) {
+  static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
+  return checkValue<T, sizeof(T)>(), Decl<NotNumeric, kEvent>(name, nullptr, nullptr, &ev.id, TypeOf<T>::code, 0, kVoid, kEventAccess, nullptr, nullptr);
+}
+
+// The device itself: its name and, optionally, the firmware version the hub shows.
+struct DeviceName {
+  constexpr DeviceName(const char* n) : name(n), firmwareText(nullptr) {}  // NOLINT: a name alone
+  constexpr DeviceName(const char* n, const char* fw) : name(n), firmwareText(fw) {}
+  constexpr DeviceName firmware(const char* fw) const { return DeviceName(name, fw); }
+  const char* name;
+  const char* firmwareText;
+};
+constexpr DeviceName device(const char* name) { return DeviceName(name); }
+
+// ---- the list of declarations ----
+template <typename... D>
+struct List;
+template <>
+struct List<> {
+  static const uint8_t size = 0;
+};
+template <typename H, typename... R>
+struct List<H, R...> {
+  static const uint8_t size = (uint8_t)(1 + sizeof...(R));
+  H head;
+  List<R...> tail;
+};
+template <typename L>
+struct Declared {
+  static constexpr uint8_t size() { return L::size; }
+  DeviceName dev;
+  L list;
+};
+constexpr List<> listOf() { return List<>{}; }
+template <typename H, typename... R>
+constexpr List<H, R...> listOf(H h, R... r) {
+  return List<H, R...>{h, listOf(r...)};
+}
+template <typename... D>
+constexpr Declared<List<D...> > declared(DeviceName dev, D... d) {
+  static_assert(sizeof...(D) <= HUBWIRE_MAX_CHANNELS, "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
+  return Declared<List<D...> >{dev, listOf(d...)};
+}
+
+// The i-th declaration of a list (0-based).
+template <size_t I>
+struct At {
+  template <typename L>
+  static constexpr auto of(const L& l) -> decltype(At<I - 1>::of(l.tail)) {
+    return At<I - 1>::of(l.tail);
+  }
+};
+template <>
+struct At<0> {
+  template <typename L>
+  static constexpr auto of(const L& l) -> decltype(l.head) {
+    return l.head;
+  }
+};
+
+// ---- the descriptor in flash: one char array per part, laid end to end (no padding between
+// char arrays), so that no character is computed twice and no recursion runs the whole length ----
+// P has constexpr static length() and at(i).
+template <typename P, typename S = typename cx::MakeSeq<P::length()>::type>
+struct Chars;
+template <typename P, size_t... I>
+struct Chars<P, cx::Seq<I...> > {
+  char c[sizeof...(I)];
+  static constexpr Chars make() { return Chars{{P::at(I)...}}; }
+};
+
+template <typename D, const D* Decls>
+struct HeadPart {
+  static constexpr Piece piece(uint8_t k) {
+    return k == 0 ? integer("{\"p\":", kProtocolVersion)
+         : k == 1 ? quoted(",\"n\":\"", Decls->dev.name)
+         : k == 2 ? (Decls->dev.firmwareText ? quoted(",\"fw\":\"", Decls->dev.firmwareText) : empty())
+                  : literal(",\"ch\":[");
+  }
+  static constexpr size_t length(uint8_t k = 0) { return k == 4 ? 0 : pieceLength(piece(k)) + length((uint8_t)(k + 1)); }
+  static constexpr char at(size_t i, uint8_t k = 0) {
+    return i < pieceLength(piece(k)) ? pieceAt(piece(k), i) : at(i - pieceLength(piece(k)), (uint8_t)(k + 1));
+  }
+};
+template <typename D, const D* Decls, size_t I>
+struct ChannelPart {
+  static constexpr size_t length() { return At<I>::of(Decls->list).jsonLength((uint8_t)(I + 1)); }
+  static constexpr char at(size_t i) { return At<I>::of(Decls->list).jsonAt((uint8_t)(I + 1), i); }
+};
+struct TailPart {
+  static constexpr size_t length() { return 2; }
+  static constexpr char at(size_t i) { return "]}"[i]; }
+};
+
+template <typename D, const D* Decls, typename S>
+struct Channels;
+template <typename D, const D* Decls>
+struct Channels<D, Decls, cx::Seq<> > {
+  Chars<TailPart> tail;
+  static constexpr Channels make() { return Channels{Chars<TailPart>::make()}; }
+};
+template <typename D, const D* Decls, size_t I, size_t... R>
+struct Channels<D, Decls, cx::Seq<I, R...> > {
+  Chars<ChannelPart<D, Decls, I> > first;
+  Channels<D, Decls, cx::Seq<R...> > rest;
+  static constexpr Channels make() {
+    return Channels{Chars<ChannelPart<D, Decls, I> >::make(), Channels<D, Decls, cx::Seq<R...> >::make()};
+  }
+};
+template <typename D, const D* Decls>
+struct Json {
+  typedef Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> Body;
+  Chars<HeadPart<D, Decls> > head;
+  Body body;
+  static const Json value;
+};
+template <typename D, const D* Decls>
+const Json<D, Decls> Json<D, Decls>::value HUBWIRE_FLASH = {Chars<HeadPart<D, Decls> >::make(), Body::make()};
+
+// A struct channel's layout text, copied into flash for the session's struct codec.
+template <typename D, const D* Decls, size_t I>
+struct LayoutPart {
+  static constexpr size_t length() { return cx::length(At<I>::of(Decls->list).layout()) + 1; }
+  static constexpr char at(size_t i) { return At<I>::of(Decls->list).layout()[i]; }
+};
+template <typename D, const D* Decls, size_t I>
+struct LayoutFlash {
+  static const Chars<LayoutPart<D, Decls, I> > value;
+};
+template <typename D, const D* Decls, size_t I>
+const Chars<LayoutPart<D, Decls, I> > LayoutFlash<D, Decls, I>::value HUBWIRE_FLASH = Chars<LayoutPart<D, Decls, I> >::make();
+
+// The function a control or action calls, kept in flash with its own type.
+template <typename D, const D* Decls, size_t I>
+struct CallFlash {
+  typedef decltype(At<I>::of(Decls->list).call()) Fn;
+  static const Fn value;
+};
+template <typename D, const D* Decls, size_t I>
+const typename CallFlash<D, Decls, I>::Fn CallFlash<D, Decls, I>::value HUBWIRE_FLASH = At<I>::of(Decls->list).call();
+
+template <typename T, Kind K, typename C>
+constexpr bool isStruct(const Decl<T, K, C>*) { return false; }
+template <Kind K, typename C>
+constexpr bool isStruct(const Decl<StructValue, K, C>*) { return true; }
+template <typename T, Kind K, typename C>
+constexpr bool isCall(const Decl<T, K, C>*) { return K == kControl || K == kAction; }
+
+template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((decltype(At<I>::of(Decls->list))*)nullptr),
+          bool IsCall = isCall((decltype(At<I>::of(Decls->list))*)nullptr)>
+struct InfoOf {
+  static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(nullptr, nullptr, nullptr); }
+};
+template <typename D, const D* Decls, size_t I>
+struct InfoOf<D, Decls, I, true, false> {
+  static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(LayoutFlash<D, Decls, I>::value.c, &structCodec, nullptr); }
+};
+template <typename D, const D* Decls, size_t I>
+struct InfoOf<D, Decls, I, false, true> {
+  static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(nullptr, nullptr, &CallFlash<D, Decls, I>::value); }
+};
+
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>
+struct Infos;
+template <typename D, const D* Decls, size_t... I>
+struct Infos<D, Decls, cx::Seq<I...> > {
+  static const ChannelInfo value[sizeof...(I) ? sizeof...(I) : 1];
+};
+template <typename D, const D* Decls, size_t... I>
+const ChannelInfo Infos<D, Decls, cx::Seq<I...> >::value[sizeof...(I) ? sizeof...(I) : 1] HUBWIRE_FLASH = {
+    InfoOf<D, Decls, I>::make()...};
+
+template <typename D, const D* Decls>
+constexpr ChannelTable table() {
+  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(Json<D, Decls>), Infos<D, Decls>::value,
+                      D::size()};
+}
+
+}  // namespace declare
+}  // namespace hubwire
+
+// Declares a sketch's channels at file scope; `var` is then what begin() takes. Between the device
+// and its channels: expose(), control(), action() and event() (see above), with their options.
+#define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
+  namespace hubwire_channels_##var {                                                               \
+  using namespace ::hubwire::declare;                                                              \
+  constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
+  }                                                                                                \
+  constexpr ::hubwire::ChannelTable var =                                                          \
+      ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>()
+
+#endif
