@@ -77,6 +77,7 @@ constexpr const char* typeNameOf(TypeCode t) {
        : t == kStruct ? "struct" : "void";
 }
 constexpr Piece typeNamed(const char* pre, TypeCode t) { return Piece{pre, kLiteral, 0, 0, typeNameOf(t), "\""}; }
+constexpr size_t scalarBytes(TypeCode t) { return t == kVoid || t > kF64 ? 0 : t <= kI8 ? 1 : t <= kI16 ? 2 : t <= kF32 ? 4 : 8; }
 
 // Access letters in the descriptor's order: r w c e s (the bits of Access, lowest first).
 constexpr size_t accessLength(int64_t a) { return a ? (a & 1) + accessLength(a >> 1) : 0; }
@@ -102,6 +103,52 @@ constexpr char fieldsAt(const char* s, size_t i, size_t j = 0) {
        : i < fieldLength(s, j) ? (i < cx::length(fieldRun(s, j)) ? fieldRun(s, j)[i] : s[j])
                                : fieldsAt(s, i - fieldLength(s, j), j + 1);
 }
+
+// A layout's size in memory, with the alignment the board gives each field (so that it can be
+// compared with sizeof the struct), or kBadLayout when the text is malformed.
+const size_t kBadLayout = 0xFFFF;
+constexpr bool typeNameAt(const char* s, size_t j, const char* n) {
+  return *n == 0 ? (s[j] == 0 || s[j] == ',' || s[j] == '[') : s[j] == *n && typeNameAt(s, j + 1, n + 1);
+}
+constexpr TypeCode layoutTypeAt(const char* s, size_t j, uint8_t t = kBool) {
+  return t > kF64 ? kVoid : typeNameAt(s, j, typeNameOf((TypeCode)t)) ? (TypeCode)t : layoutTypeAt(s, j, (uint8_t)(t + 1));
+}
+constexpr size_t colonAt(const char* s, size_t j) { return s[j] == 0 || s[j] == ':' || s[j] == ',' ? j : colonAt(s, j + 1); }
+constexpr size_t digitsEnd(const char* s, size_t j) { return s[j] >= '0' && s[j] <= '9' ? digitsEnd(s, j + 1) : j; }
+constexpr size_t numberIn(const char* s, size_t j, size_t end, size_t acc = 0) {
+  return j == end ? acc : numberIn(s, j + 1, end, acc * 10 + (size_t)(s[j] - '0'));
+}
+constexpr size_t alignOfType(TypeCode t) {
+  return t == kU16 || t == kI16 ? alignof(uint16_t) : t == kU32 || t == kI32 ? alignof(uint32_t)
+       : t == kF32 ? alignof(float) : t == kF64 ? alignof(double) : 1;
+}
+constexpr size_t alignUp(size_t v, size_t a) { return (v + a - 1) / a * a; }
+constexpr size_t maxOf(size_t a, size_t b) { return a > b ? a : b; }
+// The field whose type name starts at t (after its colon) ends at e: a count "[n]" or nothing.
+constexpr size_t countEnd(const char* s, size_t e) { return s[e] == '[' ? digitsEnd(s, e + 1) : e; }
+constexpr bool countOk(const char* s, size_t e) {
+  return s[e] != '[' || (s[countEnd(s, e)] == ']' && numberIn(s, e + 1, countEnd(s, e)) >= 1 &&
+                         numberIn(s, e + 1, countEnd(s, e)) <= 255);
+}
+constexpr size_t countOf(const char* s, size_t e) { return s[e] == '[' ? numberIn(s, e + 1, countEnd(s, e)) : 1; }
+constexpr size_t fieldEnd(const char* s, size_t e) { return s[e] == '[' ? countEnd(s, e) + 1 : e; }
+constexpr size_t typeEnd(const char* s, size_t t) { return t + cx::length(typeNameOf(layoutTypeAt(s, t))); }
+constexpr size_t layoutSizeAfter(const char* s, size_t next, size_t off, size_t maxAlign);
+constexpr size_t layoutFieldSize(const char* s, size_t j, size_t off, size_t maxAlign) {
+  return s[colonAt(s, j)] != ':' || colonAt(s, j) == j || layoutTypeAt(s, colonAt(s, j) + 1) == kVoid ||
+                 !countOk(s, typeEnd(s, colonAt(s, j) + 1))
+             ? kBadLayout
+             : layoutSizeAfter(s, fieldEnd(s, typeEnd(s, colonAt(s, j) + 1)),
+                               alignUp(off, alignOfType(layoutTypeAt(s, colonAt(s, j) + 1))) +
+                                   scalarBytes(layoutTypeAt(s, colonAt(s, j) + 1)) * countOf(s, typeEnd(s, colonAt(s, j) + 1)),
+                               maxOf(maxAlign, alignOfType(layoutTypeAt(s, colonAt(s, j) + 1))));
+}
+constexpr size_t layoutSizeAfter(const char* s, size_t next, size_t off, size_t maxAlign) {
+  return s[next] == 0 ? alignUp(off, maxAlign)
+       : s[next] == ',' && s[next + 1] != 0 ? layoutFieldSize(s, next + 1, off, maxAlign)
+                                            : kBadLayout;
+}
+constexpr size_t layoutSize(const char* s) { return *s ? layoutFieldSize(s, 0, 0, 1) : kBadLayout; }
 
 constexpr size_t valueLength(const Piece& p) {
   return p.kind == kInteger ? cx::integerLength(p.integer) : p.kind == kFloat ? cx::floatLength(p.real)
@@ -164,8 +211,8 @@ class Decl {
 
   // Everything below is for HUBWIRE_CHANNELS.
   constexpr Decl(const char* name, const char* layout, void* data, uint8_t* eventId, TypeCode code, uint8_t count,
-                 TypeCode ret, uint8_t access, Call call, Thunk thunk)
-      : name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data), eventId_(eventId),
+                 TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0)
+      : memSize_(memSize), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data), eventId_(eventId),
         change_(nullptr), call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
         flags_(0), lo_(), hi_(), failsafe_() {}
 
@@ -203,14 +250,16 @@ class Decl {
   constexpr const char* layout() const { return layout_; }
   constexpr const char* name() const { return name_; }
   constexpr Call call() const { return call_; }
+  constexpr uint16_t memSize() const { return memSize_; }
 
  private:
   constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
                  T failsafe, void (*change)())
-      : name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
+      : memSize_(d.memSize_), name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
         eventId_(d.eventId_), change_(change), call_(d.call_), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
         ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
 
+  uint16_t memSize_;  // structs: sizeof the struct, to check the layout against
   const char* name_;
   const char* layout_;
   const char* unit_;
@@ -262,7 +311,8 @@ constexpr Decl<NotNumeric, kVariable> expose(const char* name, char (&str)[N]) {
 template <typename T>
 constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const char* layout) {
   static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
-  return Decl<StructValue, kVariable>(name, layout, &var, nullptr, kStruct, 0, kVoid, kReadable, nullptr, nullptr);
+  return Decl<StructValue, kVariable>(name, layout, &var, nullptr, kStruct, 0, kVoid, kReadable, nullptr, nullptr,
+                                      (uint16_t)sizeof(T));
 }
 
 // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
@@ -451,6 +501,9 @@ struct InfoOf {
 };
 template <typename D, const D* Decls, size_t I>
 struct InfoOf<D, Decls, I, true, false> {
+  static_assert(layoutSize(At<I>::of(Decls->list).layout()) == At<I>::of(Decls->list).memSize(),
+                "struct layout does not match the struct: name:type[count] for every field, in order, "
+                "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
   static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(LayoutFlash<D, Decls, I>::value.c, &structCodec, nullptr); }
 };
 template <typename D, const D* Decls, size_t I>
