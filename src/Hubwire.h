@@ -30,6 +30,7 @@
 
 #include <Arduino.h>
 
+#include "hubwire/channels/declare.h"
 #include "hubwire/session/device.h"
 
 namespace hubwire {
@@ -53,11 +54,8 @@ class Hubwire : private hubwire::Port, public hubwire::Device {
   // Any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
   explicit Hubwire(Stream& stream) : hubwire::Port(stream), hubwire::Device(*static_cast<hubwire::Port*>(this)) {}
 
-  // Checks the declarations and starts talking. false if a declaration is wrong: error() says why
-  // and errorChannel() which channel (1 = the first declared).
-  bool begin(hubwire::Text name, void (*declarations)(), hubwire::Text firmware = hubwire::Text()) {
-    return hubwire::Device::begin(name, declarations, firmware, hubwire::bootNonce());
-  }
+  // Starts talking, with the channels HUBWIRE_CHANNELS declared.
+  bool begin(const hubwire::ChannelTable& channels) { return hubwire::Device::begin(channels, hubwire::bootNonce()); }
 };
 
 #endif

@@ -17,18 +17,18 @@ hubwire::Event<uint8_t> button; // carries how many presses so far
 
 void setBlinking(bool on) { blinking = on; }
 
-// Hubwire calls this whenever it needs to know the channels: keep it to declarations.
-void channels() {
-  hub.expose(F("blink_ms"), blinkMs).writable().range(50, 5000).unit(F("ms"));
-  hub.control(F("led"), setBlinking);
-  hub.event(F("button"), button);
-}
+// The device's name and its channels, worked out when the sketch compiles: names, units and the
+// descriptor the hub reads all live in flash, and a mistake here is a compile error.
+HUBWIRE_CHANNELS(channels, "minimal",
+  expose("blink_ms", blinkMs).writable().range(50, 5000).unit("ms"),
+  control("led", setBlinking),
+  event("button", button));
 
 void setup() {
   Serial.begin(115200);
   pinMode(LED_BUILTIN, OUTPUT);
   pinMode(2, INPUT_PULLUP);
-  hub.begin(F("minimal"), channels);
+  hub.begin(channels);
 }
 
 void loop() {

@@ -10,296 +10,71 @@ const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: th
 const uint16_t kMaxStreamIntervalMs = 60000;
 }  // namespace
 
-// ---------------------------------------------------------------- declarations
-
-void Device::addAccess(uint8_t a) {
-  if (!skip_) info_->access |= a;
-}
-void Device::setRange(ScalarBits min, ScalarBits max, ScalarOps ops) {
-  if (skip_) return;
-  info_->ops = ops;
-  info_->min = min;
-  info_->max = max;
-  info_->flags |= kHasRange;
-}
-void Device::setFailsafe(ScalarBits value, ScalarOps ops) {
-  if (skip_) return;
-  info_->ops = ops;
-  info_->failsafe = value;
-  info_->flags |= kHasFailsafe;
-}
-void Device::setText(uint8_t which, Text t) {
-  if (!skip_) (which ? info_->description : info_->unit) = t;
-}
-void Device::setChange(void (*fn)()) {
-  if (!skip_) info_->fn = fn;
-}
-
 Device::Device(Port& port)
     : DeviceState(),  // all zero
       port_(port),
       rx_(frameBuf_, sizeof(frameBuf_)),
       tx_(frameBuf_) {
-  error_ = kSetupNoDeclarations;
   peerMax_ = HUBWIRE_MAX_PAYLOAD;
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
 
-// Few, small arguments: AVR passes up to 18 bytes in registers and the rest on the stack, at a cost
-// in every declaration of every sketch.
-Device& Device::declare(Text name, void* data, TypeCode code, uint8_t count, uint16_t memSize, uint8_t access) {
-  if (pending_) finishChannel();
-  ++visitId_;
-  // Build only the channels this visit needs: one for a find, those in the window for a chunk.
-  if (mode_ == kFind) {
-    skip_ = visitId_ != target_;
-  } else if (mode_ == kDescribe) {
-    skip_ = visitId_ < resumeFrom_ || json_->done();
-    if (visitId_ == resumeFrom_) json_->seek(resumePos_);
-  }
-  if (!skip_) {
-    memset((void*)info_, 0, sizeof(ChannelInfo));  // all empty: no temporary on the stack
-    info_->name = name;
-    info_->type.code = code;
-    info_->type.count = count;
-    info_->data = data;
-    info_->memSize = memSize;
-    info_->access = access;
-  }
-  pending_ = true;
-  return *this;
-}
-
-Device& Device::declareStruct(Text name, void* data, Text layout, uint16_t memSize) {
-  declare(name, data, kStruct, 0, memSize, kReadable);
-  if (!skip_) {
-    info_->type.layout = layout;
-    info_->type.structs = structCodec;  // referenced only here: a sketch without structs links none
-    info_->fields = &describeFields;
-  }
-  return *this;
-}
-
-Device& Device::declareCall(Text name, uint8_t access, TypeCode arg, TypeCode ret, void (*fn)(), Thunk thunk) {
-  declare(name, nullptr, arg, 0, scalarSize(arg), access);
-  if (!skip_) {
-    info_->ret = ret;
-    info_->fn = fn;
-    info_->thunk = thunk;
-  }
-  return *this;
-}
-
-void Device::visit(Mode mode, ChannelInfo& scratch, uint8_t target) {
-  info_ = &scratch;
-  mode_ = mode;
-  target_ = target;
-  visitId_ = 0;
-  skip_ = false;
-  pending_ = false;
-  if (declarations_) declarations_();
-  if (pending_) finishChannel();
-  mode_ = kIdle;
-}
-
-void Device::finishChannel() {
-  pending_ = false;
-  if (skip_) return;
-  switch (mode_) {
-    case kCheck:
-      checkChannel();
-      break;
-    case kFind:  // info_ holds the target: the other channels are skipped
-      break;
-    case kDescribe:
-      describeChannel();
-      break;
-    case kFailsafe:
-      if (!(info_->flags & kHasFailsafe)) break;
-      if (info_->data) {
-        uint8_t n = info_->type.count ? info_->type.count : 1;
-        uint8_t size = scalarSize(info_->type.code);
-        for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)info_->data + i * size, &info_->failsafe, size);
-      } else {  // a control: called with the value, as if the hub had sent it
-        ScalarBits ignored;
-        info_->thunk(info_->fn, (const uint8_t*)&info_->failsafe, (uint8_t*)&ignored);
-      }
-      break;
-    default:
-      break;
-  }
+// Reads n bytes of the table's flash.
+static void fromFlash(void* to, const void* from, size_t n) {
+#if defined(__AVR__)
+  memcpy_P(to, from, n);
+#else
+  memcpy(to, from, n);
+#endif
 }
 
 bool Device::find(uint8_t id, ChannelInfo& ch) {
-  if (id == 0 || id > channelCount_) return false;
-  visit(kFind, ch, id);
+  if (id == 0 || id > table_.count) return false;
+  fromFlash(&ch, &table_.channels[id - 1], sizeof(ch));
   return true;
 }
 
-void Device::checkChannel() {
-  uint8_t id = visitId_;
-  channelCount_ = id;
-  if (error_ != kSetupOk) return;
-  if (id > HUBWIRE_MAX_CHANNELS) {
-    error_ = kSetupTooManyChannels;
-  } else if (info_->type.code == kStruct && info_->type.memSize() != info_->memSize) {
-    error_ = kSetupBadLayout;  // memSize() is 0 for a malformed layout
-  } else {
-    if (info_->eventId) *info_->eventId = id;
-    return;
+bool Device::begin(const ChannelTable& channels, uint32_t seed) {
+  table_ = channels;
+  started_ = false;
+  if (channels.count == 0) return false;
+  uint32_t h = kFnvOffset;
+  for (uint16_t i = 0; i < channels.jsonLength; ++i) {
+    uint8_t c;
+    fromFlash(&c, channels.json + i, 1);
+    h = fnv1a(h, c);
   }
-  errorChannel_ = id;
-}
-
-// ---------------------------------------------------------------- descriptor
-
-// "rw" etc., and the closing quote (the fragment opened it).
-static void putAccess(JsonWindow& j, uint8_t a) {
-  static const char kLetters[] HUBWIRE_FLASH = "rwces";  // kReadable, kWritable, ... in bit order
-  for (uint8_t i = 0; i < 5; ++i, a >>= 1)
-    if (a & 1) j.put(flashText(kLetters).at(i));
-  j.put('"');
-}
-
-// A type name and the closing quote (the fragment opened it).
-static void putType(JsonWindow& j, TypeCode code) {
-  j.flash(typeName(code).ptr);
-  j.put('"');
-}
-
-// ,"f":[{"n":"ax","t":"f32"},...] from the layout text "ax:f32,...".
-void Device::describeFields(JsonWindow& j, const ValueType& t) {
-  j.fragment(kFragFields);
-  LayoutReader r(t.layout);
-  LayoutField f;
-  while (t.structs(kStructNext, t.layout, &r, &f, 0)) {
-    if (f.nameStart) j.put(',');
-    j.fragment(kFragField);
-    j.put('"');
-    for (uint16_t i = 0; i < f.nameLen; ++i) j.put(t.layout.at((uint16_t)(f.nameStart + i)));
-    j.put('"');
-    j.fragment(kFragType);
-    putType(j, f.code);
-    if (f.count) {
-      j.fragment(kFragCount);
-      j.uinteger(f.count);
-    }
-    j.put('}');
+  descHash_ = h;
+  // Events learn their ids: emit() names the event by its handle.
+  for (uint8_t id = 1; id <= channels.count; ++id) {
+    ChannelInfo ch;
+    find(id, ch);
+    if (ch.eventId) *ch.eventId = id;
   }
-  j.put(']');
-}
-
-void Device::describeChannel() {
-  JsonWindow& j = *json_;
-  if (!j.done()) {  // the last channel starting inside the window: the next chunk resumes here
-    j.mark(visitId_);
-  }
-  if (visitId_ > 1) j.put(',');
-  j.fragment(kFragChannel);
-  j.uinteger(visitId_);
-  j.fragment(kFragName);
-  j.text(info_->name);
-  j.fragment(kFragAccess);
-  putAccess(j, info_->access);
-  j.fragment(kFragType);
-  putType(j, info_->type.code);
-  if (info_->type.count) {
-    j.fragment(kFragCount);
-    j.uinteger(info_->type.count);
-  }
-  if (info_->fields) info_->fields(j, info_->type);
-  if (info_->ret != kVoid) {
-    j.fragment(kFragReturn);
-    putType(j, info_->ret);
-  }
-  if (!info_->unit.empty()) {
-    j.fragment(kFragUnit);
-    j.text(info_->unit);
-  }
-  if (info_->flags & kHasRange) {
-    j.fragment(kFragMin);
-    info_->ops(&info_->min, nullptr, nullptr, &j);
-    j.fragment(kFragMax);
-    info_->ops(&info_->max, nullptr, nullptr, &j);
-  }
-  if (info_->flags & kHasFailsafe) {
-    j.fragment(kFragFailsafe);
-    info_->ops(&info_->failsafe, nullptr, nullptr, &j);
-  }
-  if (!info_->description.empty()) {
-    j.fragment(kFragDescription);
-    j.text(info_->description);
-  }
-  j.put('}');
-}
-
-uint16_t Device::describe(uint16_t start, uint16_t len, uint8_t* out) {
-  JsonWindow j(start, len, out);
-  json_ = &j;
-  // Resume at the channel the previous chunk ended in, when this chunk starts after it.
-  resumeFrom_ = (out && resumeId_ && start >= resumePos_) ? resumeId_ : 0;
-  describeAll(j);
-  json_ = nullptr;
-  if (out && j.markId()) {
-    resumeId_ = j.markId();
-    resumePos_ = j.markPos();
-  }
-  return j.length();
-}
-
-void Device::describeAll(JsonWindow& j) {
-  if (!resumeFrom_) describeHead(j);
-  ChannelInfo scratch;
-  visit(kDescribe, scratch);
-  j.put(']');
-  j.put('}');
-}
-
-void Device::describeHead(JsonWindow& j) {
-  j.fragment(kFragHead);
-  j.uinteger(kProtocolVersion);
-  j.fragment(kFragName);
-  j.text(name_);
-  if (!firmware_.empty()) {
-    j.fragment(kFragFirmware);
-    j.text(firmware_);
-  }
-  j.fragment(kFragChannels);
-}
-
-// ---------------------------------------------------------------- running
-
-bool Device::begin(Text name, void (*declarations)(), Text firmware, uint32_t seed) {
-  declarations_ = declarations;
-  name_ = name;
-  firmware_ = firmware;
-  channelCount_ = 0;
-  errorChannel_ = 0;
-  error_ = declarations ? kSetupOk : kSetupNoDeclarations;
-  if (error_ == kSetupOk) {
-    ChannelInfo scratch;
-    visit(kCheck, scratch);
-  }
-  if (error_ != kSetupOk) {
-    started_ = false;
-    return false;
-  }
-  {
-    JsonWindow whole(0, 0, nullptr);  // count and hash every character once
-    json_ = &whole;
-    resumeFrom_ = 0;
-    describeAll(whole);
-    json_ = nullptr;
-    descLength_ = whole.length();
-    descHash_ = whole.hash();
-  }
-  resumeId_ = 0;
   nonce_ = seed;  // until drawNonce() mixes in the moment the hub is first heard
   nonceDrawn_ = false;
   started_ = true;
   linked_ = false;
   lastSent_ = ms();  // the first announcement follows one interval after boot
   return true;
+}
+
+// Variables with a failsafe value take it (every element of an array); a control with one is
+// called with it, as if the hub had sent it.
+void Device::applyFailsafes() {
+  for (uint8_t id = 1; id <= table_.count; ++id) {
+    ChannelInfo ch;
+    find(id, ch);
+    if (!(ch.flags & kHasFailsafe)) continue;
+    if (ch.data) {
+      uint8_t n = ch.type.count ? ch.type.count : 1;
+      uint8_t size = scalarSize(ch.type.code);
+      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &ch.failsafe, size);
+    } else {
+      Scalar ignored;
+      ch.thunk(ch.call, (const uint8_t*)&ch.failsafe, (uint8_t*)&ignored);
+    }
+  }
 }
 
 // Drawn once per boot, at the first hub hello (or the first announcement if none came first):
@@ -443,8 +218,7 @@ void Device::newHubSession(uint32_t nonce) {
 
 void Device::loseLink() {
   linked_ = false;
-  ChannelInfo scratch;
-  visit(kFailsafe, scratch);
+  applyFailsafes();
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
 #endif
@@ -464,14 +238,15 @@ void Device::onChunk(const Frame& f) {
   if (f.len != kChunkRequestSize) return sendNak(f, kErrBadLength);
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
-  if (offset > descLength_) return sendNak(f, kErrBadOffset);
+  uint16_t total = table_.jsonLength;
+  if (offset > total) return sendNak(f, kErrBadOffset);
   uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
-  if (descLength_ - offset < n) n = (uint16_t)(descLength_ - offset);
+  if (total - offset < n) n = (uint16_t)(total - offset);
   uint8_t* out = tx_.payload();
   storeU16(out, offset);
-  storeU16(out + 2, descLength_);
-  describe(offset, n, out + kChunkHeader);
+  storeU16(out + 2, total);
+  fromFlash(out + kChunkHeader, table_.json + offset, n);
   reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
 }
 
@@ -498,12 +273,12 @@ void Device::onControl(const Frame& f) {
     if (code == kOk && (ch.flags & kHasRange)) {
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
       for (uint8_t i = 0; i < n && code == kOk; ++i)
-        if (!ch.ops(f.payload + i * size, &ch.min, &ch.max, nullptr)) code = kErrOutOfRange;
+        if (!ch.inRange(f.payload + i * size, &ch.min, &ch.max)) code = kErrOutOfRange;
     }
     if (code == kOk) {
       if (ch.thunk) {
         uint8_t* ret = tx_.payload();
-        if (!ch.thunk(ch.fn, f.payload, ret)) {
+        if (!ch.thunk(ch.call, f.payload, ret)) {
           code = kErrRejected;
         } else if (ch.ret != kVoid) {
           type = kMsgResponse;
@@ -511,7 +286,7 @@ void Device::onControl(const Frame& f) {
         }
       } else {
         t.fromWire(f.payload, f.len, ch.data);
-        if (ch.fn) ch.fn();
+        if (ch.change) ch.change();
       }
     }
   }
@@ -619,7 +394,7 @@ void Device::sendHello(bool isReply) {
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
   storeU32(p + 10, descHash_);
-  storeU16(p + 14, descLength_);
+  storeU16(p + 14, table_.jsonLength);
   tx_.send(port_, kMsgHello, 0, 0, kHelloSize);
 }
 
