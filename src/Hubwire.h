@@ -7,22 +7,25 @@
 //   float speed;                      // readable and writable by the hub
 //   hubwire::Event<bool> bumper;      // the hub is told exactly once per emit()
 //
-//   void channels() {                 // Hubwire runs this whenever it needs to know a channel
-//     hub.expose(F("speed"), speed).writable().range(-1, 1).unit(F("m/s")).failsafe(0);
-//     hub.event(F("bumper"), bumper);
-//   }
+//   void stopMotors() { /* the hub went silent: speed is already 0 (its failsafe) */ }
+//
+//   HUBWIRE_CHANNELS(channels, "rover",   // at file scope: worked out when the sketch compiles
+//     expose("speed", speed).writable().range(-1.0f, 1.0f).unit("m/s").failsafe(0.0f),
+//     event("bumper", bumper));
+//
 //   void setup() {
 //     Serial.begin(115200);
-//     hub.onLinkLost(stopMotors);     // the hub went silent: speed is already 0 (its failsafe)
-//     hub.begin(F("rover"), channels);
+//     hub.onLinkLost(stopMotors);
+//     hub.begin(channels);
 //   }
 //   void loop() {
 //     hub.update();                   // never blocks
 //     if (digitalRead(2) == LOW) hub.emit(bumper, true);
 //   }
 //
-// The declarations function is called again to describe, find and reset channels, so nothing about
-// a channel is copied into RAM. Put only declarations in it. The full reference is in
+// HUBWIRE_CHANNELS turns the declarations into the descriptor JSON and one record per channel,
+// constants in flash, so a channel costs no RAM and a wrong declaration fails to compile. The
+// declarations and their options are in src/hubwire/channels/declare.h; the session is
 // src/hubwire/session/device.h (class hubwire::Device, which Hubwire extends); the protocol is in
 // docs/PROTOCOL.md.
 #ifndef HUBWIRE_H

@@ -59,12 +59,11 @@ constexpr char integerAt(int64_t v, size_t i) {
 }
 
 // ---- floats: integers exactly, other values with six rounded decimals, trailing zeros dropped;
-// NaN and infinities (which JSON cannot carry) as 0. The float is taken apart by exact scaling by
-// two (no bit casts in constexpr), then worked on as integers: on AVR the compiler's own double is
-// only 32 bits, so decimal arithmetic in floating point would not be exact. ----
-
-// Called only for values the descriptor cannot print; being non-constexpr, it stops the build.
-float range_or_failsafe_beyond_1e12_is_not_supported(float v);
+// from 2^40 on (where six decimals mean nothing), nine significant digits and an exponent, which
+// reads back as the same float: 1e20, -340282347e30. NaN and infinities (which JSON cannot carry)
+// print as 0. The float is taken apart by exact scaling by two (no bit casts in constexpr), then
+// worked on as integers: on AVR the compiler's own double is only 32 bits, so decimal arithmetic
+// in floating point would not be exact. ----
 
 constexpr bool printsAsZero(float v) { return v != v || v == 0 || v > 3.4028235e38f || v < -3.4028235e38f; }
 constexpr float absolute(float v) { return v < 0 ? -v : v; }
@@ -80,10 +79,8 @@ constexpr uint32_t mantissaOf(float v) { return (uint32_t)scaled(absolute(v), ex
 // Fraction bits kept below the point: at most 40, so that fraction * 10^7 fits 64 bits.
 constexpr int fractionShift(float v) { return -exponentOfAbs(v) > 40 ? 40 : -exponentOfAbs(v); }
 constexpr uint64_t integerPart(float v) {
-  return exponentOfAbs(v) >= 0
-             ? (exponentOfAbs(v) > 16 ? (uint64_t)range_or_failsafe_beyond_1e12_is_not_supported(v)
-                                      : (uint64_t)mantissaOf(v) << exponentOfAbs(v))
-             : (-exponentOfAbs(v) >= 32 ? 0 : (uint64_t)(mantissaOf(v) >> -exponentOfAbs(v)));
+  return exponentOfAbs(v) >= 0 ? (uint64_t)mantissaOf(v) << exponentOfAbs(v)  // only below 2^40
+         : (-exponentOfAbs(v) >= 32 ? 0 : (uint64_t)(mantissaOf(v) >> -exponentOfAbs(v)));
 }
 constexpr uint64_t fractionBits(float v) {  // the fraction as a number of 2^-fractionShift units
   return exponentOfAbs(v) >= 0 ? 0
@@ -103,9 +100,41 @@ constexpr uint64_t trimmed(uint64_t d) { return d != 0 && d % 10 == 0 ? trimmed(
 constexpr size_t trailingZeros(uint64_t d) { return d != 0 && d % 10 == 0 ? 1 + trailingZeros(d / 10) : 0; }
 constexpr size_t decimalCount(float v) { return decimals(v) == 0 ? 0 : 6 - trailingZeros(decimals(v)); }
 
+// From 2^40 on: v = x * 10^k, x kept between 2^60 and 2^63 while the powers of two are multiplied
+// in (each division by ten drops less than 2^-59 of the value), then rounded to nine digits.
+struct Decimal {
+  uint64_t x;
+  int k;
+};
+constexpr Decimal toDecimal(uint64_t x, int twos, int k) {
+  return twos == 0 ? Decimal{x, k} : x < ((uint64_t)1 << 62) ? toDecimal(x * 2, twos - 1, k) : toDecimal(x / 10, twos, k + 1);
+}
+constexpr bool large(float v) { return !printsAsZero(v) && exponentOfAbs(v) > 16; }
+constexpr Decimal bigDecimal(float v) { return toDecimal(mantissaOf(v), exponentOfAbs(v), 0); }
+constexpr uint64_t nineDigits(Decimal d) {  // rounded half up from the tenth digit
+  return (d.x / pow10(digits(d.x) - 10) + 5) / 10;
+}
+constexpr Decimal rounded(Decimal d) {  // nine digits; 999999999.5 rounds up to 100000000 x 10
+  return nineDigits(d) == 1000000000 ? Decimal{100000000, d.k + (int)digits(d.x) - 8}
+                                     : Decimal{nineDigits(d), d.k + (int)digits(d.x) - 9};
+}
+constexpr Decimal significand(float v) {  // trailing zeros moved into the exponent
+  return Decimal{trimmed(rounded(bigDecimal(v)).x), rounded(bigDecimal(v)).k + (int)trailingZeros(rounded(bigDecimal(v)).x)};
+}
+constexpr size_t largeLength(float v) {
+  return digits(significand(v).x) + 1 + digits((uint64_t)significand(v).k);
+}
+constexpr char largeAt(float v, size_t i) {
+  return i < digits(significand(v).x) ? digitAt(significand(v).x, i)
+         : i == digits(significand(v).x) ? 'e'
+                                         : digitAt((uint64_t)significand(v).k, i - digits(significand(v).x) - 1);
+}
+
 constexpr bool negative(float v) { return !printsAsZero(v) && v < 0; }
 constexpr size_t floatLength(float v) {
-  return printsAsZero(v) ? 1 : (negative(v) ? 1 : 0) + digits(wholePart(v)) + (decimalCount(v) ? 1 + decimalCount(v) : 0);
+  return printsAsZero(v) ? 1
+         : (negative(v) ? 1 : 0) + (large(v) ? largeLength(v)
+                                             : digits(wholePart(v)) + (decimalCount(v) ? 1 + decimalCount(v) : 0));
 }
 constexpr char decimalAt(float v, size_t i) {  // i-th of the six decimals
   return (char)('0' + decimals(v) / pow10(5 - i) % 10);
@@ -113,6 +142,7 @@ constexpr char decimalAt(float v, size_t i) {  // i-th of the six decimals
 constexpr char floatAt(float v, size_t i) {
   return printsAsZero(v) ? '0'
          : negative(v)   ? (i == 0 ? '-' : floatAt(-v, i - 1))
+         : large(v)      ? largeAt(v, i)
          : i < digits(wholePart(v)) ? digitAt(wholePart(v), i)
          : i == digits(wholePart(v)) ? '.'
                                      : decimalAt(v, i - digits(wholePart(v)) - 1);

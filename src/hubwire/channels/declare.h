@@ -27,19 +27,55 @@ struct NotNumeric {
 struct StructValue : NotNumeric {  // marks a struct channel: its layout text is copied to flash
   constexpr StructValue() {}
 };
+template <typename T>
+struct IsNumeric {
+  static const bool value = true;
+};
+template <>
+struct IsNumeric<NotNumeric> {
+  static const bool value = false;
+};
+template <>
+struct IsNumeric<StructValue> {
+  static const bool value = false;
+};
 
 enum Kind : uint8_t { kVariable, kControl, kAction, kEvent };
+
+// Set while declaring when a range or failsafe value changes on its way into the channel's type
+// (300 for a uint8_t, -1.5 for an int16_t); Checked<> turns it into a compile error.
+const uint8_t kLossyValue = 0x80;
+
+template <typename T>
+struct IsFloat {
+  static const bool value = false;
+};
+template <>
+struct IsFloat<float> {
+  static const bool value = true;
+};
+template <>
+struct IsFloat<double> {
+  static const bool value = true;
+};
 
 // A range's or failsafe's value as stored, and the comparison the session uses for it.
 template <typename T>
 struct Limits {
   static constexpr Scalar of(T v) { return ToScalar<T>::of(v); }
   static constexpr InRange inRange(uint8_t flags) { return flags & (kHasRange | kHasFailsafe) ? &hubwire::inRange<T> : nullptr; }
+  static constexpr bool ordered(T lo, T hi) { return lo <= hi; }
+  // A float channel rounds (0.1 has no exact float); an integer one must keep the value.
+  template <typename U>
+  static constexpr bool fits(U v) { return IsFloat<T>::value || (U)(T)v == v; }
 };
 template <>
 struct Limits<NotNumeric> {
   static constexpr Scalar of(NotNumeric) { return Scalar(); }
   static constexpr InRange inRange(uint8_t) { return nullptr; }
+  static constexpr bool ordered(NotNumeric, NotNumeric) { return true; }
+  template <typename U>
+  static constexpr bool fits(U) { return true; }
 };
 template <>
 struct Limits<StructValue> : Limits<NotNumeric> {};
@@ -187,9 +223,13 @@ class Decl {
   }
   // Writes (a control's or action's argument) outside [min, max], any element of an array, are
   // refused with NAK OUT_OF_RANGE.
-  constexpr Decl range(T min, T max) const {
+  template <typename U>
+  constexpr Decl range(U min, U max) const {
     static_assert(K != kEvent, "range(): an event has no range (the sketch sets its value)");
-    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kHasRange), min, max, failsafe_, change_);
+    static_assert(K == kEvent || IsNumeric<T>::value, "range(): only a number (or an array of numbers) has a range");
+    return Decl(*this, unit_, description_, access_,
+                (uint8_t)(flags_ | kHasRange | (Limits<T>::fits(min) && Limits<T>::fits(max) ? 0 : kLossyValue)),
+                (T)min, (T)max, failsafe_, change_);
   }
   constexpr Decl unit(const char* u) const {
     return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, change_);
@@ -199,9 +239,14 @@ class Decl {
   }
   // When the link is lost the variable (every element of an array) is set to this, or the
   // control's function is called with it.
-  constexpr Decl failsafe(T value) const {
+  template <typename U>
+  constexpr Decl failsafe(U value) const {
     static_assert(K == kVariable || K == kControl, "failsafe(): only a variable or a control has a failsafe value");
-    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kHasFailsafe), lo_, hi_, value, change_);
+    static_assert(!(K == kVariable || K == kControl) || IsNumeric<T>::value,
+                  "failsafe(): only a number (or an array of numbers) has a failsafe value");
+    return Decl(*this, unit_, description_, access_,
+                (uint8_t)(flags_ | kHasFailsafe | (Limits<T>::fits(value) ? 0 : kLossyValue)), lo_, hi_, (T)value,
+                change_);
   }
   // Called after the hub wrote a new value into the variable.
   constexpr Decl onChange(void (*fn)()) const {
@@ -247,6 +292,10 @@ class Decl {
                        ret_, data_, change_, call, thunk_, Limits<T>::inRange(flags_),
                        Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_), access_, flags_, eventId_};
   }
+  constexpr const char* unitText() const { return unit_; }
+  constexpr const char* descriptionText() const { return description_; }
+  constexpr bool valuesFit() const { return !(flags_ & kLossyValue); }
+  constexpr bool rangeOrdered() const { return !(flags_ & kHasRange) || Limits<T>::ordered(lo_, hi_); }
   constexpr const char* layout() const { return layout_; }
   constexpr const char* name() const { return name_; }
   constexpr Call call() const { return call_; }
@@ -360,6 +409,13 @@ struct DeviceName {
 };
 constexpr DeviceName device(const char* name) { return DeviceName(name); }
 
+// Names as the descriptor allows them (docs/PROTOCOL.md 7): [A-Za-z_][A-Za-z0-9_]*, 1..32 long.
+constexpr bool nameStart(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; }
+constexpr bool nameRest(const char* s, size_t n = 1) {
+  return *s == 0 ? n <= 32 : (nameStart(*s) || (*s >= '0' && *s <= '9')) && nameRest(s + 1, n + 1);
+}
+constexpr bool validName(const char* s) { return nameStart(*s) && nameRest(s + 1); }
+
 // ---- the list of declarations ----
 template <typename... D>
 struct List;
@@ -388,6 +444,35 @@ template <typename... D>
 constexpr Declared<List<D...> > declared(DeviceName dev, D... d) {
   static_assert(sizeof...(D) <= HUBWIRE_MAX_CHANNELS, "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
   return Declared<List<D...> >{dev, listOf(d...)};
+}
+
+// Texts (units, descriptions, names) are worked on by recursion, one level per character: past
+// kMaxText the compiler would stop with an unclear "evaluation depth" error, so they are checked
+// first, four characters a level.
+const size_t kMaxText = 255;
+constexpr bool shortText(const char* s, size_t n = 0) {
+  return !s || n > kMaxText ? !s : !s[n] || !s[n + 1] || !s[n + 2] || !s[n + 3] || shortText(s, n + 4);
+}
+template <typename T, Kind K, typename C>
+constexpr bool textsShort(const Decl<T, K, C>& d) {
+  return shortText(d.name()) && shortText(d.unitText()) && shortText(d.descriptionText()) && shortText(d.layout());
+}
+constexpr bool allTextsShort(const List<>&) { return true; }
+template <typename H, typename... R>
+constexpr bool allTextsShort(const List<H, R...>& l) {
+  return textsShort(l.head) && allTextsShort(l.tail);
+}
+
+// Is no channel in l called name? Are all names in l different?
+constexpr bool noneNamed(const List<>&, const char*) { return true; }
+template <typename H, typename... R>
+constexpr bool noneNamed(const List<H, R...>& l, const char* name) {
+  return !cx::equal(l.head.name(), name) && noneNamed(l.tail, name);
+}
+constexpr bool namesUnique(const List<>&) { return true; }
+template <typename H, typename... R>
+constexpr bool namesUnique(const List<H, R...>& l) {
+  return noneNamed(l.tail, l.head.name()) && namesUnique(l.tail);
 }
 
 // The i-th declaration of a list (0-based).
@@ -432,9 +517,14 @@ struct HeadPart {
 };
 template <typename D, const D* Decls, size_t I>
 struct ChannelPart {
-  static constexpr size_t length() { return At<I>::of(Decls->list).jsonLength((uint8_t)(I + 1)); }
-  static constexpr char at(size_t i) { return At<I>::of(Decls->list).jsonAt((uint8_t)(I + 1), i); }
+  // The declaration, looked up once: At<I> walks the list, which per character would cost n^2.
+  typedef decltype(At<I>::of(Decls->list)) Declaration;
+  static constexpr Declaration decl = At<I>::of(Decls->list);
+  static constexpr size_t length() { return decl.jsonLength((uint8_t)(I + 1)); }
+  static constexpr char at(size_t i) { return decl.jsonAt((uint8_t)(I + 1), i); }
 };
+template <typename D, const D* Decls, size_t I>
+constexpr typename ChannelPart<D, Decls, I>::Declaration ChannelPart<D, Decls, I>::decl;
 struct TailPart {
   static constexpr size_t length() { return 2; }
   static constexpr char at(size_t i) { return "]}"[i]; }
@@ -494,20 +584,30 @@ constexpr bool isStruct(const Decl<StructValue, K, C>*) { return true; }
 template <typename T, Kind K, typename C>
 constexpr bool isCall(const Decl<T, K, C>*) { return K == kControl || K == kAction; }
 
+// What is checked of every channel (the compiler's message names the channel's index I, from 0).
+template <typename D, const D* Decls, size_t I>
+struct Checked {
+  static_assert(validName(At<I>::of(Decls->list).name()),
+                "channel name: letters, digits and _ only, not starting with a digit, at most 32 characters");
+  static_assert(At<I>::of(Decls->list).rangeOrdered(), "range(min, max): min is greater than max");
+  static_assert(At<I>::of(Decls->list).valuesFit(),
+                "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
+};
+
 template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((decltype(At<I>::of(Decls->list))*)nullptr),
           bool IsCall = isCall((decltype(At<I>::of(Decls->list))*)nullptr)>
-struct InfoOf {
+struct InfoOf : Checked<D, Decls, I> {
   static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(nullptr, nullptr, nullptr); }
 };
 template <typename D, const D* Decls, size_t I>
-struct InfoOf<D, Decls, I, true, false> {
+struct InfoOf<D, Decls, I, true, false> : Checked<D, Decls, I> {
   static_assert(layoutSize(At<I>::of(Decls->list).layout()) == At<I>::of(Decls->list).memSize(),
                 "struct layout does not match the struct: name:type[count] for every field, in order, "
                 "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
   static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(LayoutFlash<D, Decls, I>::value.c, &structCodec, nullptr); }
 };
 template <typename D, const D* Decls, size_t I>
-struct InfoOf<D, Decls, I, false, true> {
+struct InfoOf<D, Decls, I, false, true> : Checked<D, Decls, I> {
   static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(nullptr, nullptr, &CallFlash<D, Decls, I>::value); }
 };
 
@@ -523,6 +623,10 @@ const ChannelInfo Infos<D, Decls, cx::Seq<I...> >::value[sizeof...(I) ? sizeof..
 
 template <typename D, const D* Decls>
 constexpr ChannelTable table() {
+  static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
+                "a name, unit, description, layout or firmware text longer than 255 characters");
+  static_assert(namesUnique(Decls->list), "two channels have the same name");
+  static_assert(sizeof(Json<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
   return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(Json<D, Decls>), Infos<D, Decls>::value,
                       D::size()};
 }

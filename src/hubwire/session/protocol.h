@@ -7,6 +7,7 @@
 namespace hubwire {
 
 const uint8_t kProtocolVersion = 1;
+const uint16_t kMaxDescriptor = 16384;  // the longest descriptor a hub accepts (docs/PROTOCOL.md 9)
 
 enum MessageType : uint8_t {
   kMsgHello = '*',
