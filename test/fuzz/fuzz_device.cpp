@@ -23,6 +23,7 @@
 
 #include <vector>
 
+#include "hubwire/channels/declare.h"
 #include "hubwire/session/device.h"
 
 using namespace hubwire;
@@ -85,31 +86,28 @@ void actVoid(uint16_t v) { calls += v & 1; }
 int32_t noArg() { return (int32_t)++calls; }
 void plain() { ++calls; }
 
-Device* dev;
-
-void channels() {
-  dev->expose("b", vBool).writable().failsafe(0).onChange(changed);
-  dev->expose("u8", vU8).writable().streamable().range(0, 200).unit("x");
-  dev->expose("i8", vI8).writable().range(-5, 5).failsafe(-1);
-  dev->expose("u16", vU16).writable().streamable().describe("sixteen");
-  dev->expose("i16", vI16).writable().range(-1000, 1000);
-  dev->expose("u32", vU32).writable().onChange(changed);
-  dev->expose("i32", vI32).streamable();
-  dev->expose("f32", vF32).writable().streamable().range(-1, 1).failsafe(0).unit("m/s");
-  dev->expose("f64", vF64).writable().range(-1e6, 1e6);
-  dev->expose("arr", vArr).writable().streamable().range(0, 5000);
-  dev->expose("imu", vImu, "ax:f32,gyro:i16[3],temp:i16").streamable();
-  dev->expose("text", vText).writable().onChange(changed);
-  dev->control("led", setLed);
-  dev->control("checked", setChecked);
-  dev->action("act", act);
-  dev->action("actVoid", actVoid);
-  dev->action("noArg", noArg);
-  dev->action("plain", plain);
-  dev->event("bump", evBool);
-  dev->event("count", evU16);
-  dev->event("level", evF32);
-}
+HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
+  expose("b", vBool).writable().failsafe(0).onChange(changed),
+  expose("u8", vU8).writable().streamable().range(0, 200).unit("x"),
+  expose("i8", vI8).writable().range(-5, 5).failsafe(-1),
+  expose("u16", vU16).writable().streamable().describe("sixteen"),
+  expose("i16", vI16).writable().range(-1000, 1000),
+  expose("u32", vU32).writable().onChange(changed),
+  expose("i32", vI32).streamable(),
+  expose("f32", vF32).writable().streamable().range(-1, 1).failsafe(0).unit("m/s"),
+  expose("f64", vF64).writable().range(-1e6, 1e6),
+  expose("arr", vArr).writable().streamable().range(0, 5000),
+  expose("imu", vImu, "ax:f32,gyro:i16[3],temp:i16").streamable(),
+  expose("text", vText).writable().onChange(changed),
+  control("led", setLed),
+  control("checked", setChecked),
+  action("act", act),
+  action("actVoid", actVoid),
+  action("noArg", noArg),
+  action("plain", plain),
+  event("bump", evBool),
+  event("count", evU16),
+  event("level", evF32));
 
 void resetState() {
   vBool = false;
@@ -154,8 +152,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   s.now = 1000;
   s.room = (size_t)(data[0] >> 1) * 4;
   Device d(s);
-  dev = &d;
-  bool ok = d.begin("fuzz", channels, "0.1", 0x12345678);
+  bool ok = d.begin(channels, 0x12345678);
   CHECK(ok);
   checkOutput(s);
   if ((data[0] & 1) == 0) {  // raw
@@ -205,6 +202,5 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     s.now += 50;
     step(d, s);
   }
-  dev = nullptr;
   return 0;
 }

@@ -51,8 +51,7 @@ class BufferedSerial : public Stream {
 };
 
 uint16_t level = 7;
-Hubwire* dut;
-void channels() { dut->expose(F("level"), level).streamable(); }
+HUBWIRE_CHANNELS(channels, "face", expose("level", level).streamable());
 
 // The frame types the device wrote since the last call.
 std::vector<uint8_t> sentTypes(BufferedSerial& s) {
@@ -69,8 +68,7 @@ size_t count(const std::vector<uint8_t>& types, uint8_t type) {
 
 // Links a hub and subscribes it to `level` every 10 ms.
 void linkAndSubscribe(Hubwire& hub, BufferedSerial& serial) {
-  dut = &hub;
-  ASSERT_TRUE(hub.begin(F("face"), channels));
+  ASSERT_TRUE(hub.begin(channels));
   sendFrame(serial, '*', 0, 0, hubHello(42));
   hub.update();
   ASSERT_TRUE(hub.linked());

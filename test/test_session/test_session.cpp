@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "fakes.h"
+#include "hubwire/channels/declare.h"
 #include "hubwire/session/device.h"
-#include "hubwire/session/json_window.h"
 #include "hubwire/wire/bytes.h"
 
 using namespace hubwire;
@@ -18,7 +18,7 @@ using namespace hubwire::test;
 
 namespace {
 
-// The sketch under test: globals, because declarations are a plain function, as in a sketch.
+// The sketch under test: globals, because channels are declared at file scope, as in a sketch.
 float speed;
 int16_t counts[3];
 char label[9] = "hi";
@@ -47,20 +47,18 @@ void changed() { ++changes; }
 void lost() { ++lostCalls; }
 void up() { ++upCalls; }
 
-Device* dut;
-void declarations() {
-  dut->expose("speed", speed).writable().streamable().range(-1, 1).unit("m/s").failsafe(0).onChange(changed);  // 1
-  dut->expose("counts", counts).streamable();                                                                 // 2
-  dut->expose("label", label).writable().describe("a \"quoted\" label");                                      // 3
-  dut->expose("pose", pose, "x:f32,ok:u8,t:i16[2]").writable();                                              // 4
-  dut->control("led", setLed);                                                                                // 5
-  dut->control("even", refuseOdd);                                                                            // 6
-  dut->action("ping", ping);                                                                                  // 7
-  dut->action("reset", reset);                                                                                // 8
-  dut->event("alarm", alarm);                                                                                 // 9
-  dut->expose("lamp", lamp).writable().failsafe(1);                                                           // 10
-  dut->expose("temps", temps).writable().range(-40, 125).failsafe(-40);                                        // 11
-}
+HUBWIRE_CHANNELS(tester, device("tester").firmware("2.1"),
+  expose("speed", speed).writable().streamable().range(-1, 1).unit("m/s").failsafe(0).onChange(changed),  // 1
+  expose("counts", counts).streamable(),                                                                 // 2
+  expose("label", label).writable().describe("a \"quoted\" label"),                                      // 3
+  expose("pose", pose, "x:f32,ok:u8,t:i16[2]").writable(),                                              // 4
+  control("led", setLed),                                                                                // 5
+  control("even", refuseOdd),                                                                            // 6
+  action("ping", ping),                                                                                  // 7
+  action("reset", reset),                                                                                // 8
+  event("alarm", alarm),                                                                                 // 9
+  expose("lamp", lamp).writable().failsafe(1),                                                           // 10
+  expose("temps", temps).writable().range(-40, 125).failsafe(-40));                                       // 11
 
 const uint8_t kSpeed = 1, kCounts = 2, kLabel = 3, kPose = 4, kLed = 5, kEven = 6, kPing = 7, kReset = 8, kAlarm = 9,
               kLamp = 10, kTemps = 11;
@@ -87,7 +85,6 @@ class Session : public ::testing::Test {
   std::vector<RxFrame> linkFrames;
 
   void SetUp() override {
-    dut = &device;
     speed = 0;
     lamp = false;
     temps[0] = temps[1] = 0;
@@ -96,7 +93,7 @@ class Session : public ::testing::Test {
     ledCalls = pingCalls = lostCalls = upCalls = changes = 0;
     device.onLinkLost(lost);
     device.onLinkUp(up);
-    ASSERT_TRUE(device.begin("tester", declarations, "2.1", 0xABCDEF01));
+    ASSERT_TRUE(device.begin(tester, 0xABCDEF01));
   }
 
   std::vector<RxFrame> pump(uint32_t advanceMs = 0) {
@@ -189,10 +186,7 @@ struct Boot {
   Port port{stream, clock};
   Device device{port};
   bool begun;
-  explicit Boot(void (*sketch)() = declarations) {
-    dut = &device;
-    begun = device.begin("tester", sketch, "2.1", 0x1234);
-  }
+  explicit Boot(const ChannelTable& sketch = tester) { begun = device.begin(sketch, 0x1234); }
   // Handshakes with a hub that accepts payloads of up to hubMax bytes; true when linked.
   bool link(uint16_t hubMax = 255) {
     Bytes hello = hubHello(5);
@@ -315,6 +309,16 @@ TEST_F(Session, DescriptorIsValidJsonMatchingHashAndDeclarations) {
   EXPECT_EQ(t["max"], 125);
   EXPECT_EQ(t["fs"], -40);
   EXPECT_EQ(d.find("\"min\":-40,\"max\":125,\"fs\":-40"), d.find("\"min\":-40"));
+  // Byte for byte what main's run-time writer sent for the same declarations.
+  EXPECT_EQ(d, R"({"p":1,"n":"tester","fw":"2.1","ch":[)"
+               R"({"id":1,"n":"speed","a":"rws","t":"f32","u":"m/s","min":-1,"max":1,"fs":0},)"
+               R"({"id":2,"n":"counts","a":"rs","t":"i16","c":3},)"
+               R"({"id":3,"n":"label","a":"rw","t":"str","c":8,"d":"a \"quoted\" label"},)"
+               R"({"id":4,"n":"pose","a":"rw","t":"struct","f":[{"n":"x","t":"f32"},{"n":"ok","t":"u8"},{"n":"t","t":"i16","c":2}]},)"
+               R"({"id":5,"n":"led","a":"w","t":"u8"},{"id":6,"n":"even","a":"w","t":"u16"},)"
+               R"({"id":7,"n":"ping","a":"c","t":"i16","rt":"i32"},{"id":8,"n":"reset","a":"c","t":"void"},)"
+               R"({"id":9,"n":"alarm","a":"e","t":"u16"},{"id":10,"n":"lamp","a":"rw","t":"bool","fs":1},)"
+               R"({"id":11,"n":"temps","a":"rw","t":"i16","c":2,"min":-40,"max":125,"fs":-40}]})");
 }
 
 // Ranges compare in the channel's own type: every element of an array is checked, the edges
@@ -562,11 +566,11 @@ void setMotor(uint8_t v) {
   motor = v;
   ++motorCalls;
 }
-void motorDeclarations() { dut->control("motor", setMotor).failsafe(0); }
+HUBWIRE_CHANNELS(motorSketch, "tester", control("motor", setMotor).failsafe(0));
 
 TEST(Failsafe, ControlIsCalledWithItsFailsafeWhenTheLinkIsLost) {
   motorCalls = 0;
-  Boot b(motorDeclarations);
+  Boot b(motorSketch);
   ASSERT_TRUE(b.begun);
   ASSERT_TRUE(b.link());
   FakeStream& s = b.stream;
@@ -585,10 +589,10 @@ TEST(Failsafe, ControlIsCalledWithItsFailsafeWhenTheLinkIsLost) {
 // A hub that accepts 16-byte payloads is never sent a longer one (PROTOCOL 1): reading or subscribing
 // to a 24-byte value is refused with BAD_LENGTH instead.
 float wide[6];
-void wideDeclarations() { dut->expose("wide", wide).streamable(); }
+HUBWIRE_CHANNELS(wideSketch, "tester", expose("wide", wide).streamable());
 
 TEST(PeerMaximum, ValuesLongerThanTheHubAcceptsAreRefused) {
-  Boot b(wideDeclarations);
+  Boot b(wideSketch);
   ASSERT_TRUE(b.begun);
   ASSERT_TRUE(b.link(16));
   FakeStream& s = b.stream;
@@ -858,47 +862,81 @@ TEST_F(Session, UnknownMessageTypeIsNaked) {
 
 // ---- declaration errors ----
 
-Device* bad;
-void badLayout() { bad->expose("p", pose, "x:f32,ok:u8"); }  // misses t:i16[2]
-void badSyntax() { bad->expose("p", pose, "x:f32,ok:u9,t:i16[2]"); }
-void emptyLayout() {
-  bad->expose("fine", speed);
-  bad->expose("p", pose, "");
-}
-void fine() { bad->expose("fine", speed); }
-void tooMany() {
-  for (int i = 0; i < HUBWIRE_MAX_CHANNELS + 3; ++i) bad->expose("x", speed);
-}
+// Every mistake in a declaration fails to compile (test/compile_fail). What is left for begin() to
+// refuse is a table without channels.
+HUBWIRE_CHANNELS(fine, "x", expose("fine", speed));
 
-// Names are the hub's to check (it reports them with the channel); sizes and types fail to compile
-// (test/compile_fail). What is left is what only the running board can tell.
-TEST(Declarations, ErrorsAreReportedWithTheChannel) {
+TEST(Declarations, AnEmptyTableIsRefusedAndTheDeviceStaysSilent) {
   FakeStream s;
   FakeClock c;
   Port p(s, c);
   Device d(p);
-  bad = &d;
-  struct Case {
-    void (*fn)();
-    SetupError err;
-    uint8_t channel;
-  } cases[] = {{badLayout, kSetupBadLayout, 1},
-               {badSyntax, kSetupBadLayout, 1},
-               {emptyLayout, kSetupBadLayout, 2},
-               {tooMany, kSetupTooManyChannels, HUBWIRE_MAX_CHANNELS + 1}};
-  for (auto& k : cases) {
-    EXPECT_FALSE(d.begin("x", k.fn));
-    EXPECT_EQ(d.error(), k.err);
-    EXPECT_EQ(d.errorChannel(), k.channel);
-  }
-  EXPECT_FALSE(d.begin("x", nullptr));
+  EXPECT_EQ(d.error(), kSetupNoDeclarations);  // begin() not called yet
+  const ChannelTable empty = {nullptr, 0, nullptr, 0};
+  EXPECT_FALSE(d.begin(empty));
   EXPECT_EQ(d.error(), kSetupNoDeclarations);
-  s.out.clear();
+  // Neither the announcement nor an answer to a hub: a device that failed begin() stays silent.
+  c.now += HUBWIRE_ANNOUNCE_MS;
+  sendFrame(s, '*', 0, 0, hubHello(8));
   d.update();
-  EXPECT_TRUE(s.out.empty());  // a device that failed begin() stays silent
-  EXPECT_TRUE(d.begin("x", fine));  // and a corrected sketch starts
+  EXPECT_TRUE(s.out.empty());
+  EXPECT_FALSE(d.linked());
+  // And a corrected sketch starts (and speaks, so the silence above was begin()'s doing).
+  s.in.clear();
+  EXPECT_TRUE(d.begin(fine));
   EXPECT_EQ(d.error(), kSetupOk);
   EXPECT_EQ(d.channelCount(), 1);
+  c.now += HUBWIRE_ANNOUNCE_MS;
+  d.update();
+  auto f = drain(s);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].type, '*');
+  // An empty table after a good one stops the device again.
+  EXPECT_FALSE(d.begin(empty));
+  EXPECT_EQ(d.error(), kSetupNoDeclarations);
+  c.now += HUBWIRE_ANNOUNCE_MS;
+  d.update();
+  EXPECT_TRUE(s.out.empty());
+}
+
+// Descriptor numbers (min, max, fs) are printed by the compiler without floating-point arithmetic
+// (constexpr_text.h); they must read back as the same f32 the sketch declared.
+constexpr float kNumbers[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.25f, 0.7f, 0.1f, 3.3f, 5000.0f, 9.81f, 123456.789f,
+                              -32768.0f, 65535.0f, 4294967295.0f, 1e20f, -3.4028235e38f, 1e-3f, 2.5e-5f, 0.0001f,
+                              1e-14f, -1e-20f, 1.4e-45f};  // the last three print as 0 (six decimals)
+const size_t kNumberCount = sizeof(kNumbers) / sizeof(kNumbers[0]);
+
+// kNumbers[I] as the descriptor prints it, worked out by the compiler (constexpr: any part of
+// the formatter that cannot run at compile time fails the build).
+template <size_t I, typename S = typename cx::MakeSeq<cx::floatLength(kNumbers[I])>::type>
+struct Printed;
+template <size_t I, size_t... C>
+struct Printed<I, cx::Seq<C...> > {
+  static constexpr char text[sizeof...(C) + 1] = {cx::floatAt(kNumbers[I], C)..., 0};
+};
+template <size_t I, size_t... C>
+constexpr char Printed<I, cx::Seq<C...> >::text[sizeof...(C) + 1];
+
+template <size_t... I>
+std::vector<std::string> printedNumbers(cx::Seq<I...>) {
+  return {Printed<I>::text...};
+}
+
+TEST(JsonNumbers, ReadBackAsTheSameFloat) {
+  std::vector<std::string> printed = printedNumbers(cx::MakeSeq<kNumberCount>::type());
+  ASSERT_EQ(printed.size(), kNumberCount);
+  for (size_t i = 0; i < kNumberCount; ++i) {
+    float v = kNumbers[i];
+    const std::string& text = printed[i];
+    double back = nlohmann::json::parse(text).get<double>();
+    EXPECT_NEAR(back, v, std::fabs(v) * 1e-6 + 1e-6) << text;
+    if (std::fabs(v) < 1e9f && v == (float)(int32_t)v && !std::signbit(v)) {
+      EXPECT_EQ(text, std::to_string((int32_t)v)) << text;
+    }
+    if (v == 0.7f) {
+      EXPECT_EQ(text, "0.7");  // 0.699999988: rounds to 6 decimals, not truncated to 0.699999
+    }
+  }
 }
 
 }  // namespace
@@ -906,26 +944,4 @@ TEST(Declarations, ErrorsAreReportedWithTheChannel) {
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
-}
-
-// Descriptor numbers (min, max, fs) are printed without floating-point arithmetic; they must read
-// back as the same f32 the sketch declared.
-TEST(JsonNumbers, ReadBackAsTheSameFloat) {
-  const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.25f, 0.7f, 0.1f, 3.3f, 5000.0f, 9.81f, 123456.789f,
-                          -32768.0f, 65535.0f, 4294967295.0f, 1e20f, -3.4028235e38f, 1e-3f, 2.5e-5f, 0.0001f,
-                          1e-14f, -1e-20f, 1.4e-45f};  // the last three print as 0 (six decimals)
-  for (float v : values) {
-    char buf[64] = {0};
-    JsonWindow j(0, sizeof(buf) - 1, (uint8_t*)buf);
-    j.number(v);
-    double back = nlohmann::json::parse(buf).get<double>();
-    EXPECT_NEAR(back, v, std::fabs(v) * 1e-6 + 1e-6) << buf;
-    if (v == (float)(int32_t)v && std::fabs(v) < 1e9f && !std::signbit(v)) {
-      EXPECT_EQ(std::string(buf), std::to_string((int32_t)v)) << buf;
-    }
-  }
-  char buf[16] = {0};
-  JsonWindow j(0, sizeof(buf) - 1, (uint8_t*)buf);
-  j.number(0.7f);  // 0.699999988: rounds to 6 decimals, not truncated to 0.699999
-  EXPECT_STREQ(buf, "0.7");
 }
