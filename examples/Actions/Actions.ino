@@ -35,17 +35,16 @@ int8_t readPin(uint8_t pin) {
 // An action without an argument.
 uint32_t uptimeMs() { return millis(); }
 
-void channels() {
-  hub.control(F("blink"), blink).describe(F("blink the LED 0..10 times"));
-  hub.action(F("read_pin"), readPin).describe(F("1 high, 0 low, -1 no such pin"));
-  hub.action(F("uptime_ms"), uptimeMs).unit(F("ms"));
-  hub.expose(F("calls"), calls);
-}
+HUBWIRE_CHANNELS(channels, "actions",
+  control("blink", blink).describe("blink the LED 0..10 times"),
+  action("read_pin", readPin).describe("1 high, 0 low, -1 no such pin"),
+  action("uptime_ms", uptimeMs).unit("ms"),
+  expose("calls", calls));
 
 void setup() {
   Serial.begin(115200);
   pinMode(LED_BUILTIN, OUTPUT);
-  hub.begin(F("actions"), channels);
+  hub.begin(channels);
 }
 
 void loop() {

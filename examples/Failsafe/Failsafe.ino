@@ -35,11 +35,10 @@ void linkLost() {
 
 void linkUp() { digitalWrite(LED_BUILTIN, HIGH); }
 
-void channels() {
-  // failsafe(0): the value speed takes when the link is lost. The hub sees it in the descriptor.
-  hub.expose(F("speed"), speed).writable().range(-100, 100).unit(F("%")).failsafe(0).onChange(driveMotor);
-  hub.expose(F("stops"), stops).describe(F("times the failsafe stopped the motor"));
-}
+// failsafe(0): the value speed takes when the link is lost. The hub sees it in the descriptor.
+HUBWIRE_CHANNELS(channels, "failsafe",
+  expose("speed", speed).writable().range(-100, 100).unit("%").failsafe(0).onChange(driveMotor),
+  expose("stops", stops).describe("times the failsafe stopped the motor"));
 
 void setup() {
   Serial.begin(115200);
@@ -48,7 +47,7 @@ void setup() {
   pinMode(LED_BUILTIN, OUTPUT);
   hub.onLinkLost(linkLost);
   hub.onLinkUp(linkUp);
-  hub.begin(F("failsafe"), channels);
+  hub.begin(channels);
 }
 
 void loop() {

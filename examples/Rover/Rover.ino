@@ -61,20 +61,23 @@ void stopMotors() {
   analogWrite(kRightMotorPin, 0);
 }
 
-void channels() {
-  hub.expose(F("left"), left).writable().streamable().range(-1, 1).unit(F("m/s")).failsafe(0).onChange(countWrite);
-  hub.expose(F("right"), right).writable().streamable().range(-1, 1).unit(F("m/s")).failsafe(0).onChange(countWrite);
-  hub.expose(F("imu"), imu, F("ax:f32,ay:f32,az:f32,gyro:i16[3]")).streamable().describe(F("accel m/s2, gyro deg/s"));
-  hub.expose(F("range"), rangeCm).streamable().unit(F("cm"));
-  hub.expose(F("battery"), batteryMv).streamable().unit(F("mV"));
-  hub.expose(F("led"), led).writable().onChange(ledChanged);
-  hub.expose(F("name"), name).writable().onChange(countWrite);
-  hub.event(F("bumper"), bumper);
-  hub.action(F("beep"), beep).describe(F("beep for ms (max 2000)"));
-  hub.action(F("selftest"), selftest).describe(F("emit n bumper events"));
-  hub.expose(F("failsafes"), failsafes);
-  hub.expose(F("applied"), applied);
-}
+// The device and its channels, worked out when the sketch compiles: names, units and the
+// descriptor stay in flash, and a mistake here is a compile error. The list comes after everything
+// it names. selftest (above) emits bumper through its handle alone, so it can be written before
+// this list that makes it an action; begin() gives the event its id.
+HUBWIRE_CHANNELS(channels, device("rover").firmware("1.0.0"),
+  expose("left", left).writable().streamable().range(-1.0f, 1.0f).unit("m/s").failsafe(0.0f).onChange(countWrite),
+  expose("right", right).writable().streamable().range(-1.0f, 1.0f).unit("m/s").failsafe(0.0f).onChange(countWrite),
+  expose("imu", imu, "ax:f32,ay:f32,az:f32,gyro:i16[3]").streamable().describe("accel m/s2, gyro deg/s"),
+  expose("range", rangeCm).streamable().unit("cm"),
+  expose("battery", batteryMv).streamable().unit("mV"),
+  expose("led", led).writable().onChange(ledChanged),
+  expose("name", name).writable().onChange(countWrite),
+  event("bumper", bumper),
+  action("beep", beep).describe("beep for ms (max 2000)"),
+  action("selftest", selftest).describe("emit n bumper events"),
+  expose("failsafes", failsafes),
+  expose("applied", applied));
 
 void readSensors() {
   static uint32_t at;
@@ -94,7 +97,7 @@ void setup() {
   pinMode(LED_BUILTIN, OUTPUT);
   pinMode(kBumperPin, INPUT_PULLUP);
   hub.onLinkLost(stopMotors);
-  hub.begin(F("rover"), channels, F("1.0.0"));
+  hub.begin(channels);
 }
 
 void loop() {

@@ -15,14 +15,13 @@ Hubwire hub(Serial);
 uint16_t light;   // a light sensor (LDR divider) on A0: 0..1023
 uint32_t uptime;  // seconds since the board started
 
-void channels() {
-  hub.expose(F("light"), light).streamable().describe(F("A0 raw, 0..1023"));
-  hub.expose(F("uptime"), uptime).streamable().unit(F("s"));
-}
+HUBWIRE_CHANNELS(channels, "streaming",
+  expose("light", light).streamable().describe("A0 raw, 0..1023"),
+  expose("uptime", uptime).streamable().unit("s"));
 
 void setup() {
   Serial.begin(115200);
-  hub.begin(F("streaming"), channels);
+  hub.begin(channels);
 }
 
 void loop() {

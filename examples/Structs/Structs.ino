@@ -2,8 +2,9 @@
 //
 //   a struct  with named, typed fields, read (and written, and streamed) as a whole, so the hub
 //             never sees half of an update. The layout text names each field and gives its type,
-//             in the order of the struct; begin() refuses a layout whose size differs from the
-//             struct's, and error() then says kSetupBadLayout.
+//             in the order of the struct; the compiler checks it against the struct: a layout
+//             that is malformed or whose size differs from the struct's does not build ("struct
+//             layout does not match the struct"), so a wrong one never reaches the board.
 //   an array  of one type, fixed length: int16_t t[3] is i16 with 3 elements.
 //   a string  in a char array: up to its size - 1 characters; the hub cannot write longer ones.
 //
@@ -26,22 +27,14 @@ struct Gps {
 int16_t temps[3] = {215, 220, 198};  // three sensors, in tenths of a degree
 char label[21] = "bench 1";          // up to 20 characters, the hub may rename the board
 
-void channels() {
-  hub.expose(F("gps"), gps, F("lat:f32,lon:f32,altitude:i16,satellites:u8,fix:bool")).streamable();
-  hub.expose(F("temps"), temps).streamable().unit(F("0.1 C"));
-  hub.expose(F("label"), label).writable();
-}
+HUBWIRE_CHANNELS(channels, "structs",
+  expose("gps", gps, "lat:f32,lon:f32,altitude:i16,satellites:u8,fix:bool").streamable(),
+  expose("temps", temps).streamable().unit("0.1 C"),
+  expose("label", label).writable());
 
 void setup() {
   Serial.begin(115200);
-  if (!hub.begin(F("structs"), channels)) {
-    // A wrong declaration: blink fast forever, so it is noticed on the bench.
-    pinMode(LED_BUILTIN, OUTPUT);
-    for (;;) {
-      digitalWrite(LED_BUILTIN, !digitalRead(LED_BUILTIN));
-      delay(100);
-    }
-  }
+  hub.begin(channels);
 }
 
 void loop() {

@@ -16,6 +16,7 @@ enum { LOW = 0, HIGH = 1 };
 enum { INPUT = 0, OUTPUT = 1, INPUT_PULLUP = 2 };
 const uint8_t LED_BUILTIN = 13;
 const uint8_t A0 = 14;
+const uint8_t NUM_DIGITAL_PINS = 20;  // an Uno's (Actions checks its argument against it)
 
 class Stream {
  public:
