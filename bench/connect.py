@@ -141,7 +141,7 @@ open session. Medians of {a.runs} runs; ms.
         row("5a. Connect, simulated Uno, cold cache (open -> READY minus the boot delay)", "device boot + <= 150 ms",
             f"{cold_sim:.0f} ms (boot ~{med(('simuno', 'cold'), 1) - BOOT_DELAY_MS:.0f} ms after the hold, "
             f"then {cold_sim_after:.0f} ms hello -> READY)", cold_sim_after <= 150, "python bench/connect.py",
-            f"descriptor download: {-(-dlen // 28)} chunks of 28 B, each resuming where the last ended (row 2d)"),
+            f"descriptor download: {-(-dlen // 28)} chunks of 28 B, copied from flash (row 2d)"),
         row("5b. Connect, emulator, cold cache (open -> READY)", "<= 150 ms", f"{cold_emu:.0f} ms",
             cold_emu <= 150, "python bench/connect.py"),
         row("5c. Cached reconnect, simulated Uno (device hello -> READY)", "<= 30 ms",

@@ -110,7 +110,7 @@ after 20 warm-up calls, 2 ms apart; ms. Wire time uses the baud the Uno really g
 Does simuno model baud-rate timing? **Yes** (row 2, regions 30/31: the simulated UART takes about 11 bit
 times per byte, 1.09x / 1.14x the real 8N1 time). What the round trip is made of:
 - device: `R battery` costs the Uno {dev_ms:.2f} ms of CPU from the first byte read to the reply queued
-  (row 2, region 19; {cyc.get('19', 0):,.0f} cycles), most of it `find(5)` replaying declarations;
+  (row 2, region 19; {cyc.get('19', 0):,.0f} cycles; `find(5)`, one record copied from flash, is {cyc.get('27', 0):,.0f} of them);
 - hub + pty + Python threads: {emu:.2f} ms against the emulator (same library, no UART, native speed);
 - simulator artefacts (tools/simuno/README.md): simavr's `uart_pty` moves host bytes into the AVR from a 1 kHz cycle timer
   (up to 1 ms added per request) and its UART counts 11 bits per byte.

@@ -23,7 +23,7 @@ TARGET = 80  # cycles per wire byte
 # region -> (label, payload bytes of the frame fed to hub.update(), or None for a part measured alone)
 REGIONS = {
     1: ("calibration (two marks, nothing between)", None),
-    2: ("begin(): 12 Rover declarations checked, descriptor hashed, hello", None),
+    2: ("begin(): Rover's flash descriptor hashed, event ids set", None),
     3: ("hub hello -> link up + hello reply", 16),
     4: ("first update() after link-up (sends a heartbeat)", None),
     5: ("idle update(), nothing received", None),
@@ -54,7 +54,7 @@ REGIONS = {
     25: ("part: 8 x Stream::read() on the stub stream alone", None),
     26: ("part: FrameWriter::send() of an empty ACK through the port", None),
     29: ("part: FrameWriter::send() of a 4 B `r` through the port", None),
-    27: ("part: one full replay of the 12 declarations (channels())", None),
+    27: ("part: find(): one channel record copied from flash", None),
     30: ("UART: 100 bytes out at Serial.begin(115200), until TX complete", None),
     31: ("UART: 100 bytes out at Serial.begin(1000000), until TX complete", None),
 }
@@ -134,7 +134,7 @@ def run() -> None:
         ["FrameReceiver::feed() x 8: COBS, checks and the CRC", f"{c[20]:,.0f}", f"{c[20] / ctl:.0%}",
          f"region 20 (CRC alone {c[21]:,.0f}: region 21)"],
         ["ACK: FrameWriter::send() (CRC, COBS, writes)", f"{c[26]:,.0f}", f"{c[26] / ctl:.0%}", "region 26"],
-        ["dispatch: handle(), find(6) = declaration replay, check, store, onChange, reply bookkeeping",
+        ["dispatch: handle(), find(6) (one record from flash), check, store, onChange, reply bookkeeping",
          f"{other:,.0f}", f"{other / ctl:.0%}", "the rest of region 8"],
         ["**total**", f"{ctl:,.0f}", "100%", "region 8"],
     ])
@@ -156,17 +156,16 @@ Derived:
   the rest is `update()`'s loop.
 - **8-byte control frame, `C led=1`, including the ACK: {ctl:,.0f} cycles = {ctl / 8:,.0f} cycles per wire byte
   ({ctl / F_CPU * 1e6:,.0f} us)**. `C left=0.5` (11 wire bytes): {c[9]:,.0f} cycles = {c[9] / 11:,.0f}/byte.
-- **channel position**: every declaration before the addressed one costs
-  {pos_slope_u16:.0f} cycles (R u16 on ch 5 vs ch 11) / {pos_slope_4b:.0f} cycles (R 4-byte on ch 1 vs ch 12):
-  `find(id)` replays the sketch's declarations; only the target's `ChannelInfo` is built, the others
-  cost the calls themselves. A full replay of the 12 declarations costs {c[27]:,.0f} cycles (region 27).
+- **channel position**: a channel later in the table costs {pos_slope_u16:.0f} cycles more per
+  position (R u16 on ch 5 vs ch 11) / {pos_slope_4b:.0f} cycles (R 4-byte on ch 1 vs ch 12): `find(id)`
+  copies the one record from flash, whatever the id ({c[27]:,.0f} cycles, region 27).
 - **descriptor chunk**: asked out of order, a `J` costs {c[32]:,.0f} / {c[33]:,.0f} / {c[34]:,.0f} cycles
-  (offset 0 / middle / end): the device produces the JSON from the start up to the window. Asked in
-  order, as the hub does, it resumes at the channel where the previous chunk ended: {c[35]:,.0f} cycles
-  per chunk on average (region 35), so the {desc_len}-byte descriptor ({-(-desc_len // 28)} chunks of 28 bytes)
+  (offset 0 / middle / end): the JSON is a flash constant, copied from the offset asked. Asked in
+  order, as the hub does: {c[35]:,.0f} cycles per chunk on average (region 35), so the {desc_len}-byte descriptor ({-(-desc_len // 28)} chunks of 28 bytes)
   costs about {-(-desc_len // 28) * c[35] / F_CPU * 1e3:.0f} ms of device CPU per download.
 - **begin()** with Rover's 12 channels: {c[2]:,.0f} cycles = **{c[2] / F_CPU * 1e3:.1f} ms** of boot time
-  (one pass checks every declaration, hashes the names and the descriptor).
+  (it hashes the descriptor in flash and gives each event its id; the declarations were checked
+  when the sketch compiled).
 
 Breakdown of the control frame:
 
@@ -188,13 +187,13 @@ are therefore slightly pessimistic.
         row("2b. AVR cost of an 8-byte control frame incl. ACK (`C led=1`)", f"<= {TARGET} c/B = {TARGET * 8} cycles",
             f"{ctl:,.0f} cycles = {ctl / 8:,.0f} c/B ({ctl / F_CPU * 1e6:,.0f} us)", per_byte_ok,
             "python bench/rx_cycles.py",
-            f"{other / ctl:.0%} is dispatch: find() replays the declarations "
-            f"({pos_slope_u16:.0f} cycles per channel before the target)"),
+            f"{other / ctl:.0%} is dispatch: find() copies one record from flash "
+            f"({c[27]:,.0f} cycles)"),
         row("2c. AVR boot: begin() with Rover's 12 channels", "(part of 'device boot')",
             f"{c[2]:,.0f} cycles = {c[2] / F_CPU * 1e3:.1f} ms", None, "python bench/rx_cycles.py"),
         row("2d. AVR cost of one 28-byte descriptor chunk, downloaded in order", "(feeds row 5)",
             f"{c[35]:,.0f} cycles = {c[35] / F_CPU * 1e3:.2f} ms", None, "python bench/rx_cycles.py",
-            f"out of order (offset total/2, no resume point): {c[33]:,.0f} cycles"),
+            f"out of order (offset total/2): {c[33]:,.0f} cycles"),
     ]
     save("rx_cycles", rows, details, {"cycles": c, "desc_len": desc_len, "uart_cycles_per_byte": [uart115, uart1m],
                                       "uart_expected": [exp115, exp1m]})

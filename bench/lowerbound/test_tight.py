@@ -1,9 +1,10 @@
 """The Tight firmware (exact Minimal descriptor) and TightS (blink_ms also streamable) on the
 repo's simulated Uno, driven by the real Python hub.
 
-    cd /tmp/lowerbound && PYTHONPATH=/work/main/host /work/main/.venv/bin/python -m pytest -q test_tight.py
+    bash bench/lowerbound/run.sh      (builds both, prints their size, runs this file)
 
-ELFs: $TIGHT_ELF (default build/Tight/Tight.ino.elf), $TIGHTS_ELF (default build/TightS/Tight.ino.elf).
+ELFs: $TIGHT_ELF (default build/lowerbound/Tight/Tight.ino.elf), $TIGHTS_ELF (default
+build/lowerbound/TightS/Tight.ino.elf); the simulator: $HUBWIRE_SIMUNO (default build/simuno/simuno).
 """
 from __future__ import annotations
 
@@ -24,9 +25,10 @@ from hubwire.wire.frame import decode_frame
 from hubwire.wire.messages import NakCode
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIMUNO = os.environ.get("HUBWIRE_SIMUNO", "/work/main/build/simuno/simuno")
-TIGHT_ELF = os.environ.get("TIGHT_ELF", os.path.join(HERE, "build/Tight/Tight.ino.elf"))
-TIGHTS_ELF = os.environ.get("TIGHTS_ELF", os.path.join(HERE, "build/TightS/Tight.ino.elf"))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+SIMUNO = os.environ.get("HUBWIRE_SIMUNO", os.path.join(ROOT, "build/simuno/simuno"))
+TIGHT_ELF = os.environ.get("TIGHT_ELF", os.path.join(ROOT, "build/lowerbound/Tight/Tight.ino.elf"))
+TIGHTS_ELF = os.environ.get("TIGHTS_ELF", os.path.join(ROOT, "build/lowerbound/TightS/Tight.ino.elf"))
 REFERENCE = open(os.path.join(HERE, "minimal_descriptor.json"), "rb").read()  # served by the real library
 
 MINIMAL = [
