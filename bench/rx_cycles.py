@@ -23,7 +23,7 @@ TARGET = 80  # cycles per wire byte
 # region -> (label, payload bytes of the frame fed to hub.update(), or None for a part measured alone)
 REGIONS = {
     1: ("calibration (two marks, nothing between)", None),
-    2: ("begin(): Rover's flash descriptor hashed, event ids set", None),
+    2: ("begin(): Rover's table copied from flash, event ids set", None),
     3: ("hub hello -> link up + hello reply", 16),
     4: ("first update() after link-up (sends a heartbeat)", None),
     5: ("idle update(), nothing received", None),
@@ -164,8 +164,8 @@ Derived:
   order, as the hub does: {c[35]:,.0f} cycles per chunk on average (region 35), so the {desc_len}-byte descriptor ({-(-desc_len // 28)} chunks of 28 bytes)
   costs about {-(-desc_len // 28) * c[35] / F_CPU * 1e3:.0f} ms of device CPU per download.
 - **begin()** with Rover's 12 channels: {c[2]:,.0f} cycles = **{c[2] / F_CPU * 1e3:.1f} ms** of boot time
-  (it hashes the descriptor in flash and gives each event its id; the declarations were checked
-  when the sketch compiled).
+  (it copies the table from flash and gives each event its id; the declarations were checked and
+  the descriptor hashed when the sketch compiled).
 
 Breakdown of the control frame:
 

@@ -91,6 +91,10 @@ TEST_F(Limits, LargestChannelLimitTakes254Channels) {
   EXPECT_EQ(d["ch"][0]["n"], "level00000000");
   EXPECT_EQ(d["ch"][253]["id"], 254);
   EXPECT_EQ(d["ch"][253]["n"], "level11111101");
+  // The hash hello carries, worked out by the compiler, is the hash of what was sent.
+  uint32_t h = kFnvOffset;
+  for (unsigned char c : json) h = fnv1a(h, c);
+  EXPECT_EQ(device.descriptorHash(), h);
 }
 
 // HUBWIRE_MAX_STREAMS=0: no slots, so a subscription is BUSY, while a cancel (interval 0) and every

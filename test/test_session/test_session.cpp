@@ -872,7 +872,7 @@ TEST(Declarations, AnEmptyTableIsRefusedAndTheDeviceStaysSilent) {
   Port p(s, c);
   Device d(p);
   EXPECT_EQ(d.error(), kSetupNoDeclarations);  // begin() not called yet
-  const ChannelTable empty = {nullptr, 0, nullptr, 0};
+  const ChannelTable empty = {nullptr, 0, 0, nullptr, 0};
   EXPECT_FALSE(d.begin(empty));
   EXPECT_EQ(d.error(), kSetupNoDeclarations);
   // Neither the announcement nor an answer to a hub: a device that failed begin() stays silent.

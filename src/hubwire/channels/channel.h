@@ -139,6 +139,7 @@ struct ChannelInfo {
 struct ChannelTable {
   const char* json;
   uint16_t jsonLength;
+  uint32_t hash;  // FNV-1a of the JSON, worked out by the compiler as well
   const ChannelInfo* channels;
   uint8_t count;
 };

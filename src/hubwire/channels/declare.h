@@ -550,10 +550,31 @@ struct Json {
   typedef Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> Body;
   Chars<HeadPart<D, Decls> > head;
   Body body;
-  static const Json value;
+  static const Json value;  // defined constexpr below: the hash reads it while compiling
 };
 template <typename D, const D* Decls>
-const Json<D, Decls> Json<D, Decls>::value HUBWIRE_FLASH = {Chars<HeadPart<D, Decls> >::make(), Body::make()};
+constexpr Json<D, Decls> Json<D, Decls>::value HUBWIRE_FLASH = {Chars<HeadPart<D, Decls> >::make(), Body::make()};
+
+// The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
+// channel, so that the compiler's depth limit is far away.
+constexpr uint32_t fnvChars(const char* c, size_t n, uint32_t h, size_t i = 0) {
+  return i + 8 <= n ? fnvChars(c, n,
+                               fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(h, (uint8_t)c[i]), (uint8_t)c[i + 1]),
+                                                                   (uint8_t)c[i + 2]), (uint8_t)c[i + 3]),
+                                                       (uint8_t)c[i + 4]), (uint8_t)c[i + 5]), (uint8_t)c[i + 6]),
+                                     (uint8_t)c[i + 7]),
+                               i + 8)
+         : i < n ? fnvChars(c, n, fnv1a(h, (uint8_t)c[i]), i + 1)
+                 : h;
+}
+template <typename D, const D* Decls>
+constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<> >& b, uint32_t h) {
+  return fnvChars(b.tail.c, sizeof(b.tail.c), h);
+}
+template <typename D, const D* Decls, size_t I, size_t... R>
+constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32_t h) {
+  return hashOf(b.rest, fnvChars(b.first.c, sizeof(b.first.c), h));
+}
 
 // A struct channel's layout text, copied into flash for the session's struct codec.
 template <typename D, const D* Decls, size_t I>
@@ -627,7 +648,10 @@ constexpr ChannelTable table() {
                 "a name, unit, description, layout or firmware text longer than 255 characters");
   static_assert(namesUnique(Decls->list), "two channels have the same name");
   static_assert(sizeof(Json<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
-  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(Json<D, Decls>), Infos<D, Decls>::value,
+  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(Json<D, Decls>),
+                      hashOf(Json<D, Decls>::value.body,
+                             fnvChars(Json<D, Decls>::value.head.c, sizeof(Json<D, Decls>::value.head.c), kFnvOffset)),
+                      Infos<D, Decls>::value,
                       D::size()};
 }
 
@@ -641,7 +665,7 @@ constexpr ChannelTable table() {
   using namespace ::hubwire::declare;                                                              \
   constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
   }                                                                                                \
-  constexpr ::hubwire::ChannelTable var =                                                          \
+  constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>()
 
 #endif

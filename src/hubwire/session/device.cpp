@@ -35,18 +35,11 @@ bool Device::find(uint8_t id, ChannelInfo& ch) {
 }
 
 bool Device::begin(const ChannelTable& channels, uint32_t seed) {
-  table_ = channels;
+  fromFlash(&table_, &channels, sizeof(table_));
   started_ = false;
-  if (channels.count == 0) return false;
-  uint32_t h = kFnvOffset;
-  for (uint16_t i = 0; i < channels.jsonLength; ++i) {
-    uint8_t c;
-    fromFlash(&c, channels.json + i, 1);
-    h = fnv1a(h, c);
-  }
-  descHash_ = h;
+  if (table_.count == 0) return false;
   // Events learn their ids: emit() names the event by its handle.
-  for (uint8_t id = 1; id <= channels.count; ++id) {
+  for (uint8_t id = 1; id <= table_.count; ++id) {
     ChannelInfo ch;
     find(id, ch);
     if (ch.eventId) *ch.eventId = id;
@@ -393,7 +386,7 @@ void Device::sendHello(bool isReply) {
   storeU32(p + 2, nonce_);
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
-  storeU32(p + 10, descHash_);
+  storeU32(p + 10, table_.hash);
   storeU16(p + 14, table_.jsonLength);
   tx_.send(port_, kMsgHello, 0, 0, kHelloSize);
 }

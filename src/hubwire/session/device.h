@@ -52,9 +52,8 @@ struct DeviceState {
   // read the question first), and frames of our own wait until no frame is arriving.
   uint8_t frameBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
 
-  // The sketch's channels (all in flash) and the descriptor's hash.
+  // The sketch's channels (all in flash).
   ChannelTable table_;
-  uint32_t descHash_;
 
   // Session.
   uint32_t nonce_, hubNonce_;  // nonce_ holds begin()'s seed until it is drawn
@@ -103,8 +102,8 @@ class Device : private DeviceState {
 
   // ---- running ----
 
-  // Starts the session with the channels HUBWIRE_CHANNELS declared (declare.h); false for an empty
-  // table. seed should differ between boots where the board can tell (a boot counter, a hardware
+  // Starts the session with the channels HUBWIRE_CHANNELS declared (declare.h; the table is in
+  // flash, where only that macro puts it); false for an empty table. seed should differ between boots where the board can tell (a boot counter, a hardware
   // RNG); the session nonce also mixes in the moment the hub is first heard, which differs even
   // when the seed cannot.
   bool begin(const ChannelTable& channels, uint32_t seed = 0);
@@ -127,7 +126,7 @@ class Device : private DeviceState {
   SetupError error() const { return started_ ? kSetupOk : kSetupNoDeclarations; }
   uint8_t channelCount() const { return table_.count; }
   uint16_t descriptorLength() const { return table_.jsonLength; }
-  uint32_t descriptorHash() const { return descHash_; }
+  uint32_t descriptorHash() const { return table_.hash; }
   uint8_t eventsQueued() const { return eventCount_; }
   const LinkCounters& counters() const { return rx_.counters; }
 

@@ -33,7 +33,7 @@ const uint8_t kSampleHeader = 2;
 
 // FNV-1a 32, the descriptor hash carried in hello.
 const uint32_t kFnvOffset = 0x811C9DC5UL;
-inline uint32_t fnv1a(uint32_t h, uint8_t b) { return (h ^ b) * 0x01000193UL; }
+constexpr uint32_t fnv1a(uint32_t h, uint8_t b) { return (h ^ b) * 0x01000193UL; }
 
 }  // namespace hubwire
 

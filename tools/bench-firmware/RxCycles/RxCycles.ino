@@ -127,8 +127,8 @@ void setup() {
   markStart(1);  // 1: calibration (empty region)
   markEnd(1);
 
-  // 2: begin(): the 12 declarations were checked when this sketch compiled; begin() only hashes
-  // the descriptor JSON in flash and gives the event its id (it sends nothing)
+  // 2: begin(): the 12 declarations were checked and the descriptor hashed when this sketch
+  // compiled; begin() copies the table from flash and gives the event its id (it sends nothing)
   markStart(2);
   bool ok = hub.begin(channels);
   markEnd(2);
