@@ -120,18 +120,22 @@ bool inRange(const void* v, const Scalar* lo, const Scalar* hi) {
   return x >= a && x <= b;  // NaN fails
 }
 
+// A channel's range and failsafe values (ChannelInfo::flags says which it has), in flash apart
+// from its record: only channels that declare them pay for them.
+struct ChannelLimits {
+  InRange inRange;  // their type's comparison
+  Scalar min, max, failsafe;
+};
+
 struct ChannelInfo {
   ValueType type;    // value, call argument, or event value
   TypeCode ret;      // callables: return value (a scalar)
-  void* data;        // the variable behind a readable/writable channel
-  void (*change)();  // called after the hub wrote the variable
-  const void* call;  // controls and actions: the function, kept in flash (see Thunk)
-  Thunk thunk;       // how to call it
-  InRange inRange;   // range / failsafe: their type's comparison
-  Scalar min, max, failsafe;
+  void* data;        // the variable behind a readable/writable channel; events: the handle's id
+  const void* call;  // the function a control or action calls, or a variable's onChange (in flash, see Thunk)
+  Thunk thunk;       // how to call a control or action
+  const ChannelLimits* limits;  // in flash; nullptr without range and failsafe
   uint8_t access;
   uint8_t flags;
-  uint8_t* eventId;  // events: the handle's id, set by begin()
 };
 
 // A sketch's declarations as begin() takes them (HUBWIRE_CHANNELS): the descriptor JSON and one

@@ -215,11 +215,11 @@ class Decl {
   // Readable by the hub; writes it sends are stored in the variable.
   constexpr Decl writable() const {
     static_assert(K == kVariable, "writable(): only a variable declared with expose() can be written by the hub");
-    return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, change_);
+    return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, call_);
   }
   constexpr Decl streamable() const {
     static_assert(K == kVariable, "streamable(): only a variable declared with expose() can be streamed");
-    return Decl(*this, unit_, description_, (uint8_t)(access_ | kStreamable), flags_, lo_, hi_, failsafe_, change_);
+    return Decl(*this, unit_, description_, (uint8_t)(access_ | kStreamable), flags_, lo_, hi_, failsafe_, call_);
   }
   // Writes (a control's or action's argument) outside [min, max], any element of an array, are
   // refused with NAK OUT_OF_RANGE.
@@ -229,13 +229,13 @@ class Decl {
     static_assert(K == kEvent || IsNumeric<T>::value, "range(): only a number (or an array of numbers) has a range");
     return Decl(*this, unit_, description_, access_,
                 (uint8_t)(flags_ | kHasRange | (Limits<T>::fits(min) && Limits<T>::fits(max) ? 0 : kLossyValue)),
-                (T)min, (T)max, failsafe_, change_);
+                (T)min, (T)max, failsafe_, call_);
   }
   constexpr Decl unit(const char* u) const {
-    return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, change_);
+    return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, call_);
   }
   constexpr Decl describe(const char* d) const {
-    return Decl(*this, unit_, d, access_, flags_, lo_, hi_, failsafe_, change_);
+    return Decl(*this, unit_, d, access_, flags_, lo_, hi_, failsafe_, call_);
   }
   // When the link is lost the variable (every element of an array) is set to this, or the
   // control's function is called with it.
@@ -246,19 +246,19 @@ class Decl {
                   "failsafe(): only a number (or an array of numbers) has a failsafe value");
     return Decl(*this, unit_, description_, access_,
                 (uint8_t)(flags_ | kHasFailsafe | (Limits<T>::fits(value) ? 0 : kLossyValue)), lo_, hi_, (T)value,
-                change_);
+                call_);
   }
-  // Called after the hub wrote a new value into the variable.
+  // Called after the hub wrote a new value into the variable (kept where a control's function is).
   constexpr Decl onChange(void (*fn)()) const {
     static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
     return Decl(*this, unit_, description_, access_, flags_, lo_, hi_, failsafe_, fn);
   }
 
   // Everything below is for HUBWIRE_CHANNELS.
-  constexpr Decl(const char* name, const char* layout, void* data, uint8_t* eventId, TypeCode code, uint8_t count,
+  constexpr Decl(const char* name, const char* layout, void* data, TypeCode code, uint8_t count,
                  TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0)
-      : memSize_(memSize), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data), eventId_(eventId),
-        change_(nullptr), call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
+      : memSize_(memSize), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data),
+        call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
         flags_(0), lo_(), hi_(), failsafe_() {}
 
   // The k-th piece of this channel's JSON, as channel id.
@@ -284,14 +284,17 @@ class Decl {
     return i < pieceLength(piece(k, id)) ? pieceAt(piece(k, id), i)
                                          : jsonAt(id, i - pieceLength(piece(k, id)), (uint8_t)(k + 1));
   }
-  // What the session needs at run time. layout: the flash copy of a struct's layout text, structs
-  // its codec (named only for structs: a sketch without them links none); call: the flash copy of
-  // the function a control or action calls.
-  constexpr ChannelInfo info(const char* layout, StructCodec structs, const void* call) const {
-    return ChannelInfo{ValueType{code_, count_, Text(layout, true), structs},
-                       ret_, data_, change_, call, thunk_, Limits<T>::inRange(flags_),
-                       Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_), access_, flags_, eventId_};
+  // What the session needs at run time, given the flash copies it points to: a struct's layout
+  // text and codec (named only for structs: a sketch without them links none), the function a
+  // control or action calls or a variable's onChange, the range and failsafe values.
+  constexpr ChannelInfo info(const char* layout, StructCodec structs, const void* call, const ChannelLimits* limits) const {
+    return ChannelInfo{ValueType{code_, count_, Text(layout, true), structs}, ret_, data_, call, thunk_, limits,
+                       access_, flags_};
   }
+  constexpr ChannelLimits limits() const {
+    return ChannelLimits{Limits<T>::inRange(flags_), Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_)};
+  }
+  constexpr bool hasLimits() const { return flags_ & (kHasRange | kHasFailsafe); }
   constexpr const char* unitText() const { return unit_; }
   constexpr const char* descriptionText() const { return description_; }
   constexpr bool valuesFit() const { return !(flags_ & kLossyValue); }
@@ -303,9 +306,9 @@ class Decl {
 
  private:
   constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
-                 T failsafe, void (*change)())
+                 T failsafe, Call call)
       : memSize_(d.memSize_), name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
-        eventId_(d.eventId_), change_(change), call_(d.call_), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
+        call_(call), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
         ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
 
   uint16_t memSize_;  // structs: sizeof the struct, to check the layout against
@@ -314,8 +317,6 @@ class Decl {
   const char* unit_;
   const char* description_;
   void* data_;
-  uint8_t* eventId_;
-  void (*change_)();
   Call call_;
   Thunk thunk_;
   TypeCode code_;
@@ -343,60 +344,60 @@ constexpr bool checkReturn() {
 // A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
 template <typename T>
 constexpr Decl<T, kVariable> expose(const char* name, T& var) {
-  return checkValue<T, sizeof(T)>(), Decl<T, kVariable>(name, nullptr, &var, nullptr, TypeOf<T>::code, 0, kVoid, kReadable, nullptr, nullptr);
+  return checkValue<T, sizeof(T)>(), Decl<T, kVariable>(name, nullptr, &var, TypeOf<T>::code, 0, kVoid, kReadable, nullptr, nullptr);
 }
 template <typename T, size_t N>
 constexpr Decl<T, kVariable> expose(const char* name, T (&arr)[N]) {
   static_assert(N <= 255, "arrays hold at most 255 elements");
-  return checkValue<T, sizeof(arr)>(), Decl<T, kVariable>(name, nullptr, arr, nullptr, TypeOf<T>::code, (uint8_t)N, kVoid, kReadable, nullptr, nullptr);
+  return checkValue<T, sizeof(arr)>(), Decl<T, kVariable>(name, nullptr, arr, TypeOf<T>::code, (uint8_t)N, kVoid, kReadable, nullptr, nullptr);
 }
 template <size_t N>
 constexpr Decl<NotNumeric, kVariable> expose(const char* name, char (&str)[N]) {
   static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
   static_assert(N + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "string longer than HUBWIRE_MAX_PAYLOAD - 3: raise it");
-  return Decl<NotNumeric, kVariable>(name, nullptr, str, nullptr, kStr, (uint8_t)(N - 1), kVoid, kReadable, nullptr, nullptr);
+  return Decl<NotNumeric, kVariable>(name, nullptr, str, kStr, (uint8_t)(N - 1), kVoid, kReadable, nullptr, nullptr);
 }
 // A struct with named fields, laid out by text such as "ax:f32,ay:f32,gyro:i16[3]".
 template <typename T>
 constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const char* layout) {
   static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
-  return Decl<StructValue, kVariable>(name, layout, &var, nullptr, kStruct, 0, kVoid, kReadable, nullptr, nullptr,
+  return Decl<StructValue, kVariable>(name, layout, &var, kStruct, 0, kVoid, kReadable, nullptr, nullptr,
                                       (uint16_t)sizeof(T));
 }
 
 // A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
 template <typename T>
 constexpr Decl<T, kControl, void (*)(T)> control(const char* name, void (*fn)(T)) {
-  return checkValue<T, sizeof(T)>(), Decl<T, kControl, void (*)(T)>(name, nullptr, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callVoid<T>);
+  return checkValue<T, sizeof(T)>(), Decl<T, kControl, void (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callVoid<T>);
 }
 template <typename T>
 constexpr Decl<T, kControl, bool (*)(T)> control(const char* name, bool (*fn)(T)) {
-  return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
+  return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
 }
 
 // A callable action: the hub calls fn with an argument and gets its return value.
 template <typename R, typename A>
 constexpr Decl<A, kAction, R (*)(A)> action(const char* name, R (*fn)(A)) {
   return checkValue<A, sizeof(A)>(), checkReturn<R>(),
-         Decl<A, kAction, R (*)(A)>(name, nullptr, nullptr, nullptr, TypeOf<A>::code, 0, TypeOf<R>::code, kCallable, fn, &callRet<R, A>);
+         Decl<A, kAction, R (*)(A)>(name, nullptr, nullptr, TypeOf<A>::code, 0, TypeOf<R>::code, kCallable, fn, &callRet<R, A>);
 }
 template <typename A>
 constexpr Decl<A, kAction, void (*)(A)> action(const char* name, void (*fn)(A)) {
-  return checkValue<A, sizeof(A)>(), Decl<A, kAction, void (*)(A)>(name, nullptr, nullptr, nullptr, TypeOf<A>::code, 0, kVoid, kCallable, fn, &callVoid<A>);
+  return checkValue<A, sizeof(A)>(), Decl<A, kAction, void (*)(A)>(name, nullptr, nullptr, TypeOf<A>::code, 0, kVoid, kCallable, fn, &callVoid<A>);
 }
 template <typename R>
 constexpr Decl<NotNumeric, kAction, R (*)()> action(const char* name, R (*fn)()) {
-  return checkReturn<R>(), Decl<NotNumeric, kAction, R (*)()>(name, nullptr, nullptr, nullptr, kVoid, 0, TypeOf<R>::code, kCallable, fn, &callNoArg<R>);
+  return checkReturn<R>(), Decl<NotNumeric, kAction, R (*)()>(name, nullptr, nullptr, kVoid, 0, TypeOf<R>::code, kCallable, fn, &callNoArg<R>);
 }
 constexpr Decl<NotNumeric, kAction> action(const char* name, void (*fn)()) {
-  return Decl<NotNumeric, kAction>(name, nullptr, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
+  return Decl<NotNumeric, kAction>(name, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
 }
 
 // An event the sketch emits with emit(); the hub is told exactly once.
 template <typename T>
 constexpr Decl<NotNumeric, kEvent> event(const char* name, Event<T>& ev) {
   static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
-  return checkValue<T, sizeof(T)>(), Decl<NotNumeric, kEvent>(name, nullptr, nullptr, &ev.id, TypeOf<T>::code, 0, kVoid, kEventAccess, nullptr, nullptr);
+  return checkValue<T, sizeof(T)>(), Decl<NotNumeric, kEvent>(name, nullptr, &ev.id, TypeOf<T>::code, 0, kVoid, kEventAccess, nullptr, nullptr);
 }
 
 // The device itself: its name and, optionally, the firmware version the hub shows.
@@ -589,7 +590,7 @@ struct LayoutFlash {
 template <typename D, const D* Decls, size_t I>
 const Chars<LayoutPart<D, Decls, I> > LayoutFlash<D, Decls, I>::value HUBWIRE_FLASH = Chars<LayoutPart<D, Decls, I> >::make();
 
-// The function a control or action calls, kept in flash with its own type.
+// The function a control or action calls (or a variable's onChange), kept in flash with its own type.
 template <typename D, const D* Decls, size_t I>
 struct CallFlash {
   typedef decltype(At<I>::of(Decls->list).call()) Fn;
@@ -598,12 +599,18 @@ struct CallFlash {
 template <typename D, const D* Decls, size_t I>
 const typename CallFlash<D, Decls, I>::Fn CallFlash<D, Decls, I>::value HUBWIRE_FLASH = At<I>::of(Decls->list).call();
 
+// A channel's range and failsafe values, in flash only for channels that declare them.
+template <typename D, const D* Decls, size_t I>
+struct LimitsFlash {
+  static const ChannelLimits value;
+};
+template <typename D, const D* Decls, size_t I>
+const ChannelLimits LimitsFlash<D, Decls, I>::value HUBWIRE_FLASH = At<I>::of(Decls->list).limits();
+
 template <typename T, Kind K, typename C>
 constexpr bool isStruct(const Decl<T, K, C>*) { return false; }
 template <Kind K, typename C>
 constexpr bool isStruct(const Decl<StructValue, K, C>*) { return true; }
-template <typename T, Kind K, typename C>
-constexpr bool isCall(const Decl<T, K, C>*) { return K == kControl || K == kAction; }
 
 // What is checked of every channel (the compiler's message names the channel's index I, from 0).
 template <typename D, const D* Decls, size_t I>
@@ -615,21 +622,43 @@ struct Checked {
                 "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
 };
 
-template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((decltype(At<I>::of(Decls->list))*)nullptr),
-          bool IsCall = isCall((decltype(At<I>::of(Decls->list))*)nullptr)>
-struct InfoOf : Checked<D, Decls, I> {
-  static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(nullptr, nullptr, nullptr); }
+// The flash copies a record points to, each instantiated (and so kept) only where it applies.
+template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((decltype(At<I>::of(Decls->list))*)nullptr)>
+struct StructOf {
+  static constexpr const char* layout() { return nullptr; }
+  static constexpr StructCodec codec() { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
-struct InfoOf<D, Decls, I, true, false> : Checked<D, Decls, I> {
+struct StructOf<D, Decls, I, true> {
   static_assert(layoutSize(At<I>::of(Decls->list).layout()) == At<I>::of(Decls->list).memSize(),
                 "struct layout does not match the struct: name:type[count] for every field, in order, "
                 "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
-  static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(LayoutFlash<D, Decls, I>::value.c, &structCodec, nullptr); }
+  static constexpr const char* layout() { return LayoutFlash<D, Decls, I>::value.c; }
+  static constexpr StructCodec codec() { return &structCodec; }
+};
+template <typename D, const D* Decls, size_t I, bool HasCall = At<I>::of(Decls->list).call() != nullptr>
+struct CallOf {
+  static constexpr const void* get() { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
-struct InfoOf<D, Decls, I, false, true> : Checked<D, Decls, I> {
-  static constexpr ChannelInfo make() { return At<I>::of(Decls->list).info(nullptr, nullptr, &CallFlash<D, Decls, I>::value); }
+struct CallOf<D, Decls, I, true> {
+  static constexpr const void* get() { return &CallFlash<D, Decls, I>::value; }
+};
+template <typename D, const D* Decls, size_t I, bool HasLimits = At<I>::of(Decls->list).hasLimits()>
+struct LimitsOf {
+  static constexpr const ChannelLimits* get() { return nullptr; }
+};
+template <typename D, const D* Decls, size_t I>
+struct LimitsOf<D, Decls, I, true> {
+  static constexpr const ChannelLimits* get() { return &LimitsFlash<D, Decls, I>::value; }
+};
+
+template <typename D, const D* Decls, size_t I>
+struct InfoOf : Checked<D, Decls, I> {
+  static constexpr ChannelInfo make() {
+    return At<I>::of(Decls->list).info(StructOf<D, Decls, I>::layout(), StructOf<D, Decls, I>::codec(),
+                                       CallOf<D, Decls, I>::get(), LimitsOf<D, Decls, I>::get());
+  }
 };
 
 template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>

@@ -42,7 +42,7 @@ bool Device::begin(const ChannelTable& channels, uint32_t seed) {
   for (uint8_t id = 1; id <= table_.count; ++id) {
     ChannelInfo ch;
     find(id, ch);
-    if (ch.eventId) *ch.eventId = id;
+    if (ch.access & kEventAccess) *(uint8_t*)ch.data = id;
   }
   nonce_ = seed;  // until drawNonce() mixes in the moment the hub is first heard
   nonceDrawn_ = false;
@@ -59,13 +59,15 @@ void Device::applyFailsafes() {
     ChannelInfo ch;
     find(id, ch);
     if (!(ch.flags & kHasFailsafe)) continue;
+    ChannelLimits lim;
+    fromFlash(&lim, ch.limits, sizeof(lim));
     if (ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
-      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &ch.failsafe, size);
+      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &lim.failsafe, size);
     } else {
       Scalar ignored;
-      ch.thunk(ch.call, (const uint8_t*)&ch.failsafe, (uint8_t*)&ignored);
+      ch.thunk(ch.call, (const uint8_t*)&lim.failsafe, (uint8_t*)&ignored);
     }
   }
 }
@@ -264,9 +266,11 @@ void Device::onControl(const Frame& f) {
     const ValueType& t = ch.type;
     code = t.check(f.payload, f.len);
     if (code == kOk && (ch.flags & kHasRange)) {
+      ChannelLimits lim;
+      fromFlash(&lim, ch.limits, sizeof(lim));
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
       for (uint8_t i = 0; i < n && code == kOk; ++i)
-        if (!ch.inRange(f.payload + i * size, &ch.min, &ch.max)) code = kErrOutOfRange;
+        if (!lim.inRange(f.payload + i * size, &lim.min, &lim.max)) code = kErrOutOfRange;
     }
     if (code == kOk) {
       if (ch.thunk) {
@@ -279,7 +283,7 @@ void Device::onControl(const Frame& f) {
         }
       } else {
         t.fromWire(f.payload, f.len, ch.data);
-        if (ch.change) ch.change();
+        if (ch.call) functionAt<void (*)()>(ch.call)();
       }
     }
   }
