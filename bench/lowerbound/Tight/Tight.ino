@@ -1,9 +1,9 @@
 // Tight: examples/Minimal with a size-first device implementation (tight.h/.cpp) instead of
-// Hubwire.h. The descriptor and channel table below are what a compile-time step would generate
-// from Minimal's declarations:
-//   expose(F("blink_ms"), blinkMs).writable().range(50, 5000).unit(F("ms"));
-//   control(F("led"), setBlinking);
-//   event(F("button"), button);
+// Hubwire.h. The descriptor and channel table below, written by hand, are what HUBWIRE_CHANNELS
+// builds from Minimal's declarations:
+//   expose("blink_ms", blinkMs).writable().range(50, 5000).unit("ms"),
+//   control("led", setBlinking),
+//   event("button", button)
 #include "tight.h"
 
 uint16_t blinkMs = 500;  // the hub may set 50..5000 ms
