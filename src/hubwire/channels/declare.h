@@ -547,14 +547,19 @@ struct Channels<D, Decls, cx::Seq<I, R...> > {
   }
 };
 template <typename D, const D* Decls>
-struct Json {
-  typedef Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> Body;
+struct JsonText {
   Chars<HeadPart<D, Decls> > head;
-  Body body;
-  static const Json value;  // defined constexpr below: the hash reads it while compiling
+  Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> body;
+};
+// value is constexpr where it is declared (the hash reads it while compiling), so it is a member of
+// a class of its own: a class cannot hold a constexpr object of its own, still incomplete, type.
+template <typename D, const D* Decls>
+struct Json {
+  typedef JsonText<D, Decls> Text;
+  static constexpr Text value = {Chars<HeadPart<D, Decls> >::make(), decltype(Text::body)::make()};
 };
 template <typename D, const D* Decls>
-constexpr Json<D, Decls> Json<D, Decls>::value HUBWIRE_FLASH = {Chars<HeadPart<D, Decls> >::make(), Body::make()};
+constexpr typename Json<D, Decls>::Text Json<D, Decls>::value HUBWIRE_FLASH;
 
 // The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
 // channel, so that the compiler's depth limit is far away.
@@ -676,8 +681,8 @@ constexpr ChannelTable table() {
   static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
                 "a name, unit, description, layout or firmware text longer than 255 characters");
   static_assert(namesUnique(Decls->list), "two channels have the same name");
-  static_assert(sizeof(Json<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
-  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(Json<D, Decls>),
+  static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
+  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
                       hashOf(Json<D, Decls>::value.body,
                              fnvChars(Json<D, Decls>::value.head.c, sizeof(Json<D, Decls>::value.head.c), kFnvOffset)),
                       Infos<D, Decls>::value,
