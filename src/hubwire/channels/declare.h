@@ -492,6 +492,16 @@ struct At<0> {
   }
 };
 
+// The I-th declaration of a sketch's list, looked up once: At<I> walks the list, which every
+// character of the JSON (or every use) repeating it would make cost n^2 while compiling.
+template <typename D, const D* Decls, size_t I>
+struct DeclAt {
+  typedef decltype(At<I>::of(Decls->list)) Type;
+  static constexpr Type decl = At<I>::of(Decls->list);
+};
+template <typename D, const D* Decls, size_t I>
+constexpr typename DeclAt<D, Decls, I>::Type DeclAt<D, Decls, I>::decl;
+
 // ---- the descriptor in flash: one char array per part, laid end to end (no padding between
 // char arrays), so that no character is computed twice and no recursion runs the whole length ----
 // P has constexpr static length() and at(i).
@@ -518,14 +528,9 @@ struct HeadPart {
 };
 template <typename D, const D* Decls, size_t I>
 struct ChannelPart {
-  // The declaration, looked up once: At<I> walks the list, which per character would cost n^2.
-  typedef decltype(At<I>::of(Decls->list)) Declaration;
-  static constexpr Declaration decl = At<I>::of(Decls->list);
-  static constexpr size_t length() { return decl.jsonLength((uint8_t)(I + 1)); }
-  static constexpr char at(size_t i) { return decl.jsonAt((uint8_t)(I + 1), i); }
+  static constexpr size_t length() { return DeclAt<D, Decls, I>::decl.jsonLength((uint8_t)(I + 1)); }
+  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.jsonAt((uint8_t)(I + 1), i); }
 };
-template <typename D, const D* Decls, size_t I>
-constexpr typename ChannelPart<D, Decls, I>::Declaration ChannelPart<D, Decls, I>::decl;
 struct TailPart {
   static constexpr size_t length() { return 2; }
   static constexpr char at(size_t i) { return "]}"[i]; }
@@ -585,8 +590,8 @@ constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32
 // A struct channel's layout text, copied into flash for the session's struct codec.
 template <typename D, const D* Decls, size_t I>
 struct LayoutPart {
-  static constexpr size_t length() { return cx::length(At<I>::of(Decls->list).layout()) + 1; }
-  static constexpr char at(size_t i) { return At<I>::of(Decls->list).layout()[i]; }
+  static constexpr size_t length() { return cx::length(DeclAt<D, Decls, I>::decl.layout()) + 1; }
+  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.layout()[i]; }
 };
 template <typename D, const D* Decls, size_t I>
 struct LayoutFlash {
@@ -598,11 +603,11 @@ const Chars<LayoutPart<D, Decls, I> > LayoutFlash<D, Decls, I>::value HUBWIRE_FL
 // The function a control or action calls (or a variable's onChange), kept in flash with its own type.
 template <typename D, const D* Decls, size_t I>
 struct CallFlash {
-  typedef decltype(At<I>::of(Decls->list).call()) Fn;
+  typedef decltype(DeclAt<D, Decls, I>::decl.call()) Fn;
   static const Fn value;
 };
 template <typename D, const D* Decls, size_t I>
-const typename CallFlash<D, Decls, I>::Fn CallFlash<D, Decls, I>::value HUBWIRE_FLASH = At<I>::of(Decls->list).call();
+const typename CallFlash<D, Decls, I>::Fn CallFlash<D, Decls, I>::value HUBWIRE_FLASH = DeclAt<D, Decls, I>::decl.call();
 
 // A channel's range and failsafe values, in flash only for channels that declare them.
 template <typename D, const D* Decls, size_t I>
@@ -610,7 +615,7 @@ struct LimitsFlash {
   static const ChannelLimits value;
 };
 template <typename D, const D* Decls, size_t I>
-const ChannelLimits LimitsFlash<D, Decls, I>::value HUBWIRE_FLASH = At<I>::of(Decls->list).limits();
+const ChannelLimits LimitsFlash<D, Decls, I>::value HUBWIRE_FLASH = DeclAt<D, Decls, I>::decl.limits();
 
 template <typename T, Kind K, typename C>
 constexpr bool isStruct(const Decl<T, K, C>*) { return false; }
@@ -620,28 +625,28 @@ constexpr bool isStruct(const Decl<StructValue, K, C>*) { return true; }
 // What is checked of every channel (the compiler's message names the channel's index I, from 0).
 template <typename D, const D* Decls, size_t I>
 struct Checked {
-  static_assert(validName(At<I>::of(Decls->list).name()),
+  static_assert(validName(DeclAt<D, Decls, I>::decl.name()),
                 "channel name: letters, digits and _ only, not starting with a digit, at most 32 characters");
-  static_assert(At<I>::of(Decls->list).rangeOrdered(), "range(min, max): min is greater than max");
-  static_assert(At<I>::of(Decls->list).valuesFit(),
+  static_assert(DeclAt<D, Decls, I>::decl.rangeOrdered(), "range(min, max): min is greater than max");
+  static_assert(DeclAt<D, Decls, I>::decl.valuesFit(),
                 "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
 };
 
 // The flash copies a record points to, each instantiated (and so kept) only where it applies.
-template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((decltype(At<I>::of(Decls->list))*)nullptr)>
+template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((typename DeclAt<D, Decls, I>::Type*)nullptr)>
 struct StructOf {
   static constexpr const char* layout() { return nullptr; }
   static constexpr StructCodec codec() { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
 struct StructOf<D, Decls, I, true> {
-  static_assert(layoutSize(At<I>::of(Decls->list).layout()) == At<I>::of(Decls->list).memSize(),
+  static_assert(layoutSize(DeclAt<D, Decls, I>::decl.layout()) == DeclAt<D, Decls, I>::decl.memSize(),
                 "struct layout does not match the struct: name:type[count] for every field, in order, "
                 "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
   static constexpr const char* layout() { return LayoutFlash<D, Decls, I>::value.c; }
   static constexpr StructCodec codec() { return &structCodec; }
 };
-template <typename D, const D* Decls, size_t I, bool HasCall = At<I>::of(Decls->list).call() != nullptr>
+template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.call() != nullptr>
 struct CallOf {
   static constexpr const void* get() { return nullptr; }
 };
@@ -649,7 +654,7 @@ template <typename D, const D* Decls, size_t I>
 struct CallOf<D, Decls, I, true> {
   static constexpr const void* get() { return &CallFlash<D, Decls, I>::value; }
 };
-template <typename D, const D* Decls, size_t I, bool HasLimits = At<I>::of(Decls->list).hasLimits()>
+template <typename D, const D* Decls, size_t I, bool HasLimits = DeclAt<D, Decls, I>::decl.hasLimits()>
 struct LimitsOf {
   static constexpr const ChannelLimits* get() { return nullptr; }
 };
@@ -661,7 +666,7 @@ struct LimitsOf<D, Decls, I, true> {
 template <typename D, const D* Decls, size_t I>
 struct InfoOf : Checked<D, Decls, I> {
   static constexpr ChannelInfo make() {
-    return At<I>::of(Decls->list).info(StructOf<D, Decls, I>::layout(), StructOf<D, Decls, I>::codec(),
+    return DeclAt<D, Decls, I>::decl.info(StructOf<D, Decls, I>::layout(), StructOf<D, Decls, I>::codec(),
                                        CallOf<D, Decls, I>::get(), LimitsOf<D, Decls, I>::get());
   }
 };

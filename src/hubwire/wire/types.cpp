@@ -38,7 +38,6 @@ uint8_t scalarSize(TypeCode t) {  // arithmetic, not a switch: AVR keeps switch 
   return t <= kI8 ? 1 : t <= kI16 ? 2 : t <= kF32 ? 4 : 8;
 }
 
-bool isScalar(TypeCode t) { return t >= kBool && t <= kF64; }
 
 Text typeName(TypeCode t) {
   if (t >= kTypeCount) t = kVoid;
@@ -171,8 +170,6 @@ uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16
     case kStructFromWire:
       structFromWire(layout, (const uint8_t*)in, out);
       return 0;
-    case kStructNext:
-      return ((LayoutReader*)in)->next(*(LayoutField*)out);
   }
   return 0;
 }

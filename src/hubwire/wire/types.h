@@ -48,7 +48,6 @@ enum ErrorCode : uint8_t {
 uint8_t scalarSize(TypeCode t);
 // The descriptor's name for the type ("f32", "str", ...).
 Text typeName(TypeCode t);
-bool isScalar(TypeCode t);
 
 // Maps C++ types to wire types at compile time.
 template <typename T>
@@ -92,9 +91,9 @@ class LayoutReader {
 // Struct values are handled only through one function, which the struct form of Device::expose()
 // refers to: a sketch that declares no struct links none of it (about 1 KB of flash on AVR). One
 // function rather than a table of them, because AVR keeps such tables in RAM.
-enum StructOp : uint8_t { kStructWireSize, kStructMemSize, kStructToWire, kStructCheck, kStructFromWire, kStructNext };
+enum StructOp : uint8_t { kStructWireSize, kStructMemSize, kStructToWire, kStructCheck, kStructFromWire };
 // kStructToWire: in = memory, out = wire. kStructCheck: in = wire, len. kStructFromWire: in = wire,
-// out = memory. kStructNext: in = LayoutReader*, out = LayoutField*, returns 1 while fields remain.
+// out = memory.
 typedef uint16_t (*StructCodec)(StructOp op, Text layout, const void* in, void* out, uint16_t len);
 uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len);
 
