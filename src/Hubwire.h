@@ -26,7 +26,7 @@
 // HUBWIRE_CHANNELS turns the declarations into the descriptor JSON and one record per channel,
 // constants in flash, so a channel costs no RAM and a wrong declaration fails to compile. The
 // declarations and their options are in src/hubwire/channels/declare.h; the session is
-// src/hubwire/session/device.h (class hubwire::Device, which Hubwire extends); the protocol is in
+// src/hubwire/session/session.h (class hubwire::Session, which Hubwire extends); the protocol is in
 // docs/PROTOCOL.md.
 #ifndef HUBWIRE_H
 #define HUBWIRE_H
@@ -34,7 +34,7 @@
 #include <Arduino.h>
 
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/device.h"
+#include "hubwire/session/session.h"
 
 namespace hubwire {
 
@@ -47,18 +47,18 @@ class Port {
 };
 
 // Seeds the session nonce: differs between resets (a counter that survives them) and, where the
-// board has one, comes from a hardware RNG. See Device::begin().
+// board has one, comes from a hardware RNG. See Session::begin().
 uint32_t bootNonce();
 
 }  // namespace hubwire
 
-class Hubwire : private hubwire::Port, public hubwire::Device {
+class Hubwire : private hubwire::Port, public hubwire::Session {
  public:
   // Any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
-  explicit Hubwire(Stream& stream) : hubwire::Port(stream), hubwire::Device(*static_cast<hubwire::Port*>(this)) {}
+  explicit Hubwire(Stream& stream) : hubwire::Port(stream), hubwire::Session(*static_cast<hubwire::Port*>(this)) {}
 
   // Starts talking, with the channels HUBWIRE_CHANNELS declared.
-  bool begin(const hubwire::ChannelTable& channels) { return hubwire::Device::begin(channels, hubwire::bootNonce()); }
+  bool begin(const hubwire::ChannelTable& channels) { return hubwire::Session::begin(channels, hubwire::bootNonce()); }
 };
 
 #endif

@@ -35,7 +35,7 @@ uint32_t bootNonce() {
 #elif defined(ESP32)
   bootCounter ^= esp_random();
 #endif
-  // Differs from the last boot; Device mixes in the moment the hub is first heard and its nonce.
+  // Differs from the last boot; Session mixes in the moment the hub is first heard and its nonce.
   return ++bootCounter;
 }
 

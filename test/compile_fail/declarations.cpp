@@ -3,7 +3,7 @@
 // file with correct declarations must compile. A case adds one declaration (CASE) to the control's
 // table, or compiles the control with a setting too small for it (its flags in CMakeLists.txt).
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/device.h"
+#include "hubwire/session/session.h"
 
 using namespace hubwire;
 
@@ -129,7 +129,7 @@ HUBWIRE_CHANNELS(many, "many", MANY_8(a), MANY_5(b), MANY_3(c), MANY_2(d));
 #endif
 
 // Tables are used: a sketch hands them to begin().
-bool start(Device& d) {
+bool start(Session& d) {
 #if HUBWIRE_CASE >= 21 && HUBWIRE_CASE <= 23
   d.begin(many);
 #endif

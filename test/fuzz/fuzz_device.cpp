@@ -1,7 +1,7 @@
 // libFuzzer harness: the device session dispatcher (src/hubwire/session/device.*) fed arbitrary
 // bytes through a fake stream, with a fake clock that the input advances.
 //
-// The Device declares channels of every kind: each scalar type (bool .. f64), a fixed array, a
+// The Session declares channels of every kind: each scalar type (bool .. f64), a fixed array, a
 // struct, a bounded string, writable/streamable/ranged/failsafe options, controls (plain and
 // refusing), actions (with and without argument / return value) and three events.
 //
@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/device.h"
+#include "hubwire/session/session.h"
 
 using namespace hubwire;
 
@@ -136,7 +136,7 @@ void checkOutput(Port& s) {
   s.out.clear();
 }
 
-void step(Device& d, Port& s) {
+void step(Session& d, Port& s) {
   d.update();
   CHECK(d.eventsQueued() <= HUBWIRE_EVENT_QUEUE);
   checkOutput(s);
@@ -151,7 +151,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
   s.now = 1000;
   s.room = (size_t)(data[0] >> 1) * 4;
-  Device d(s);
+  Session d(s);
   bool ok = d.begin(channels, 0x12345678);
   CHECK(ok);
   checkOutput(s);

@@ -7,7 +7,7 @@
 
 #include "fakes.h"
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/device.h"
+#include "hubwire/session/session.h"
 
 #if HUBWIRE_MAX_STREAMS != 0 || HUBWIRE_MAX_CHANNELS != 254
 #error "test_limits is built with -DHUBWIRE_MAX_STREAMS=0 -DHUBWIRE_MAX_CHANNELS=254"
@@ -39,7 +39,7 @@ class Limits : public ::testing::Test {
   FakeStream stream;
   FakeClock clock;
   Port port{stream, clock};
-  Device device{port};
+  Session device{port};
 
   // Starts the session with a hub.
   void link() {

@@ -10,7 +10,7 @@
 
 #include "fakes.h"
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/device.h"
+#include "hubwire/session/session.h"
 #include "hubwire/wire/bytes.h"
 
 using namespace hubwire;
@@ -79,7 +79,7 @@ class Session : public ::testing::Test {
   FakeStream stream;
   FakeClock clock;
   Port port{stream, clock};
-  Device device{port};
+  hubwire::Session device{port};
   uint8_t seq = 0;
   std::vector<RxFrame> others;  // frames sent in the same update() as the last answer
   std::vector<RxFrame> linkFrames;
@@ -184,7 +184,7 @@ struct Boot {
   FakeStream stream;
   FakeClock clock;
   Port port{stream, clock};
-  Device device{port};
+  hubwire::Session device{port};
   bool begun;
   explicit Boot(const ChannelTable& sketch = tester) { begun = device.begin(sketch, 0x1234); }
   // Handshakes with a hub that accepts payloads of up to hubMax bytes; true when linked.
@@ -207,7 +207,7 @@ TEST(Nonce, DependsOnWhenTheHubIsFirstHeard) {
     ASSERT_TRUE(b.begun);
     FakeStream& s = b.stream;
     FakeClock& c = b.clock;
-    Device& d = b.device;
+    hubwire::Session& d = b.device;
     c.now += 40;
     c.us = 40000 + (uint32_t)boot * 1372;  // the hub's hello lands at another instant
     sendFrame(s, '*', 0, 0, hubHello(9));
@@ -229,7 +229,7 @@ TEST(Nonce, DependsOnTheHubsNonceInTheFirstHelloHeard) {
     ASSERT_TRUE(b.begun);
     FakeStream& s = b.stream;
     FakeClock& c = b.clock;
-    Device& d = b.device;
+    hubwire::Session& d = b.device;
     c.us = 40000;  // identical timing
     sendFrame(s, '*', 0, 0, hubHello(100 + (uint32_t)boot));
     d.update();
@@ -575,7 +575,7 @@ TEST(Failsafe, ControlIsCalledWithItsFailsafeWhenTheLinkIsLost) {
   ASSERT_TRUE(b.link());
   FakeStream& s = b.stream;
   FakeClock& c = b.clock;
-  Device& d = b.device;
+  hubwire::Session& d = b.device;
   sendFrame(s, 'C', 1, 1, Bytes(1, 9));
   d.update();
   EXPECT_EQ(motor, 9);
@@ -597,7 +597,7 @@ TEST(PeerMaximum, ValuesLongerThanTheHubAcceptsAreRefused) {
   ASSERT_TRUE(b.link(16));
   FakeStream& s = b.stream;
   FakeClock& c = b.clock;
-  Device& d = b.device;
+  hubwire::Session& d = b.device;
   drain(s);
   sendFrame(s, 'R', 1, 1);
   sendFrame(s, 'S', 2, 1, le<uint16_t>(50));
@@ -626,7 +626,7 @@ TEST_F(Session, LinkLossTimeoutFollowsTheHubsHeartbeat) {
   EXPECT_FALSE(device.linked());
 }
 
-// Device times are 16-bit milliseconds: a slow hub's timeout is capped just below 65.5 s, and
+// Session times are 16-bit milliseconds: a slow hub's timeout is capped just below 65.5 s, and
 // still measured exactly across the 16-bit wrap of millis().
 // One buffer receives and sends: a frame of our own (here a heartbeat) waits while a hub frame is
 // half received, and both arrive intact.
@@ -870,7 +870,7 @@ TEST(Declarations, AnEmptyTableIsRefusedAndTheDeviceStaysSilent) {
   FakeStream s;
   FakeClock c;
   Port p(s, c);
-  Device d(p);
+  hubwire::Session d(p);
   EXPECT_EQ(d.error(), kSetupNoDeclarations);  // begin() not called yet
   const ChannelTable empty = {nullptr, 0, 0, nullptr, 0};
   EXPECT_FALSE(d.begin(empty));

@@ -12,12 +12,12 @@
 #include <set>
 
 #include "fakes.h"
-#include "hubwire/session/protocol.h"
+#include "hubwire/wire/messages.h"
 #include "hubwire/wire/bytes.h"
 #include "hubwire/wire/cobs.h"
 #include "hubwire/wire/crc16.h"
 #include "hubwire/wire/frame.h"
-#include "hubwire/wire/types.h"
+#include "hubwire/wire/values.h"
 
 using namespace hubwire;
 using namespace hubwire::test;

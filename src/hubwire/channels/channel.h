@@ -10,14 +10,14 @@
 
 #include "../config.h"
 #include "../text.h"
-#include "../wire/types.h"
+#include "../wire/values.h"
 
 namespace hubwire {
 
 enum Access : uint8_t { kReadable = 1, kWritable = 2, kCallable = 4, kEventAccess = 8, kStreamable = 16 };
 enum ChannelFlags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
 
-// A declared event: keep one per event (a global), emit with Device::emit().
+// A declared event: keep one per event (a global), emit with Session::emit().
 template <typename T>
 struct Event {
   uint8_t id;  // set by begin()

@@ -1,4 +1,4 @@
-#include "device.h"
+#include "session.h"
 
 #include "../wire/bytes.h"
 
@@ -10,8 +10,8 @@ const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: th
 const uint16_t kMaxStreamIntervalMs = 60000;
 }  // namespace
 
-Device::Device(Port& port)
-    : DeviceState(),  // all zero
+Session::Session(Port& port)
+    : SessionState(),  // all zero
       port_(port),
       rx_(frameBuf_, sizeof(frameBuf_)),
       tx_(frameBuf_) {
@@ -28,13 +28,13 @@ static void fromFlash(void* to, const void* from, size_t n) {
 #endif
 }
 
-bool Device::find(uint8_t id, ChannelInfo& ch) {
+bool Session::find(uint8_t id, ChannelInfo& ch) {
   if (id == 0 || id > table_.count) return false;
   fromFlash(&ch, &table_.channels[id - 1], sizeof(ch));
   return true;
 }
 
-bool Device::begin(const ChannelTable& channels, uint32_t seed) {
+bool Session::begin(const ChannelTable& channels, uint32_t seed) {
   fromFlash(&table_, &channels, sizeof(table_));
   started_ = false;
   if (table_.count == 0) return false;
@@ -54,7 +54,7 @@ bool Device::begin(const ChannelTable& channels, uint32_t seed) {
 
 // Variables with a failsafe value take it (every element of an array); a control with one is
 // called with it, as if the hub had sent it.
-void Device::applyFailsafes() {
+void Session::applyFailsafes() {
   for (uint8_t id = 1; id <= table_.count; ++id) {
     ChannelInfo ch;
     find(id, ch);
@@ -75,19 +75,19 @@ void Device::applyFailsafes() {
 // Drawn once per boot, at the first hub hello (or the first announcement if none came first):
 // the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
 // connection even where a simulated or freshly powered board repeats everything else.
-void Device::drawNonce(uint32_t hubNonce) {
+void Session::drawNonce(uint32_t hubNonce) {
   uint32_t h = mixNonce(mixNonce(mixNonce(kFnvOffset, nonce_), portMicros(port_)), hubNonce);
   nonce_ = h ? h : 1;  // never 0: the protocol reserves it
   nonceDrawn_ = true;
 }
 
 // FNV-1a over the four bytes of v, least significant first.
-uint32_t Device::mixNonce(uint32_t h, uint32_t v) {
+uint32_t Session::mixNonce(uint32_t h, uint32_t v) {
   for (uint8_t i = 0; i < 4; ++i, v >>= 8) h = fnv1a(h, (uint8_t)v);
   return h;
 }
 
-void Device::update() {
+void Session::update() {
   if (!started_) return;
   uint8_t i = 0;
   for (; i < kMaxBytesPerUpdate; ++i) {
@@ -118,7 +118,7 @@ void Device::update() {
   sendSamples(now);
 }
 
-void Device::handle(const Frame& f) {
+void Session::handle(const Frame& f) {
   lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
@@ -172,7 +172,7 @@ void Device::handle(const Frame& f) {
   }
 }
 
-void Device::onHello(const Frame& f) {
+void Session::onHello(const Frame& f) {
   if (f.len < kHelloSize) {
     ++rx_.counters.dropped;
     sendNak(f, kErrBadLength);
@@ -202,7 +202,7 @@ void Device::onHello(const Frame& f) {
   }
 }
 
-void Device::newHubSession(uint32_t nonce) {
+void Session::newHubSession(uint32_t nonce) {
   hubKnown_ = true;
   hubNonce_ = nonce;
   lastTxnValid_ = false;
@@ -211,7 +211,7 @@ void Device::newHubSession(uint32_t nonce) {
 #endif
 }
 
-void Device::loseLink() {
+void Session::loseLink() {
   linked_ = false;
   applyFailsafes();
 #if HUBWIRE_MAX_STREAMS > 0
@@ -221,7 +221,7 @@ void Device::loseLink() {
   if (onLinkLost_) onLinkLost_();
 }
 
-void Device::onAck(const Frame& f, bool nak) {
+void Session::onAck(const Frame& f, bool nak) {
   (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
   if (!eventInFlight_ || f.seq != eventSeq_ || f.id != events_[eventHead_].id) return;
   eventInFlight_ = false;
@@ -229,7 +229,7 @@ void Device::onAck(const Frame& f, bool nak) {
   --eventCount_;
 }
 
-void Device::onChunk(const Frame& f) {
+void Session::onChunk(const Frame& f) {
   if (f.len != kChunkRequestSize) return sendNak(f, kErrBadLength);
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
@@ -245,7 +245,7 @@ void Device::onChunk(const Frame& f) {
   reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
 }
 
-void Device::onRequest(const Frame& f) {
+void Session::onRequest(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
   if (!(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
@@ -254,7 +254,7 @@ void Device::onRequest(const Frame& f) {
   reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
 }
 
-void Device::onControl(const Frame& f) {
+void Session::onControl(const Frame& f) {
   uint8_t code = kOk;
   uint8_t type = kMsgAck, len = 0;
   ChannelInfo ch;
@@ -298,7 +298,7 @@ void Device::onControl(const Frame& f) {
   reply(type, f, len);
 }
 
-void Device::onSubscribe(const Frame& f) {
+void Session::onSubscribe(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
   if (!(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
@@ -335,7 +335,7 @@ void Device::onSubscribe(const Frame& f) {
   reply(kMsgAck, f, 2);
 }
 
-void Device::sendSamples(uint16_t now) {
+void Session::sendSamples(uint16_t now) {
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
     Subscription& s = streams_[i];
@@ -361,7 +361,7 @@ void Device::sendSamples(uint16_t now) {
 #endif
 }
 
-bool Device::emitRaw(uint8_t id, const void* value, uint8_t size) {
+bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
   if (!started_ || id == 0 || eventCount_ >= HUBWIRE_EVENT_QUEUE) return false;
   QueuedEvent& e = events_[(eventHead_ + eventCount_) % HUBWIRE_EVENT_QUEUE];
   e.id = id;
@@ -371,7 +371,7 @@ bool Device::emitRaw(uint8_t id, const void* value, uint8_t size) {
   return true;
 }
 
-void Device::sendEvent(uint16_t now) {
+void Session::sendEvent(uint16_t now) {
   QueuedEvent& e = events_[eventHead_];
   if (!eventInFlight_) {
     ++eventSeq_;  // a new event: a new seq. A retry keeps it.
@@ -382,7 +382,7 @@ void Device::sendEvent(uint16_t now) {
   eventSentAt_ = now;
 }
 
-void Device::sendHello(bool isReply) {
+void Session::sendHello(bool isReply) {
   if (!nonceDrawn_) drawNonce(0);
   uint8_t* p = tx_.payload();
   p[0] = kProtocolVersion;
@@ -395,7 +395,7 @@ void Device::sendHello(bool isReply) {
   tx_.send(port_, kMsgHello, 0, 0, kHelloSize);
 }
 
-void Device::sendHeartbeat(uint16_t now) {
+void Session::sendHeartbeat(uint16_t now) {
   uint8_t* p = tx_.payload();
   ++beatCounter_;
   storeU16(p, beatCounter_);
@@ -408,11 +408,11 @@ void Device::sendHeartbeat(uint16_t now) {
   beatSent_ = true;
 }
 
-void Device::sendNak(const Frame& f, uint8_t code) {
+void Session::sendNak(const Frame& f, uint8_t code) {
   tx_.payload()[0] = code;
   reply(kMsgNak, f, 1);
 }
 
-void Device::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(port_, type, f.seq, f.id, len); }
+void Session::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(port_, type, f.seq, f.id, len); }
 
 }  // namespace hubwire

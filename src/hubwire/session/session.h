@@ -4,8 +4,8 @@
 // The channels come from HUBWIRE_CHANNELS (../channels/declare.h): the descriptor JSON and one
 // record per channel, constants in flash. Nothing about a channel is copied into RAM, so a channel
 // costs flash only: that is what lets an Uno with 2 KB of SRAM carry a dozen described channels.
-#ifndef HUBWIRE_SESSION_DEVICE_H
-#define HUBWIRE_SESSION_DEVICE_H
+#ifndef HUBWIRE_SESSION_SESSION_H
+#define HUBWIRE_SESSION_SESSION_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -15,13 +15,13 @@
 #include "../port.h"
 #include "../text.h"
 #include "../wire/frame.h"
-#include "../wire/types.h"
+#include "../wire/values.h"
 #include "../channels/channel.h"
-#include "protocol.h"
+#include "../wire/messages.h"
 
 namespace hubwire {
 
-// Why begin() refused the channel table; see Device::error(). Everything else about the
+// Why begin() refused the channel table; see Session::error(). Everything else about the
 // declarations is checked when the sketch compiles (declare.h).
 enum SetupError : uint8_t {
   kSetupOk = 0,
@@ -35,9 +35,9 @@ struct Same {
   typedef T type;
 };
 
-// Everything a Device changes while it runs, kept apart from its references so that one
+// Everything a Session changes while it runs, kept apart from its references so that one
 // value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
-struct DeviceState {
+struct SessionState {
   // Flags, one bit each (SRAM is the Uno's scarcest resource).
   bool nonceDrawn_ : 1;     // nonce_ is this boot's nonce (not yet: it holds the seed)
   bool started_ : 1;        // begin() succeeded
@@ -96,9 +96,9 @@ struct DeviceState {
 #endif
 };
 
-class Device : private DeviceState {
+class Session : private SessionState {
  public:
-  explicit Device(Port& port);
+  explicit Session(Port& port);
 
   // ---- running ----
 

@@ -1,6 +1,6 @@
 // Message types, hello and heartbeat layouts (docs/PROTOCOL.md 2-3).
-#ifndef HUBWIRE_SESSION_PROTOCOL_H
-#define HUBWIRE_SESSION_PROTOCOL_H
+#ifndef HUBWIRE_WIRE_MESSAGES_H
+#define HUBWIRE_WIRE_MESSAGES_H
 
 #include <stdint.h>
 

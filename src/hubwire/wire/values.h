@@ -1,6 +1,6 @@
 // Channel value types and how they travel on the wire (docs/PROTOCOL.md 6).
-#ifndef HUBWIRE_WIRE_TYPES_H
-#define HUBWIRE_WIRE_TYPES_H
+#ifndef HUBWIRE_WIRE_VALUES_H
+#define HUBWIRE_WIRE_VALUES_H
 
 #include <stddef.h>
 #include <stdint.h>

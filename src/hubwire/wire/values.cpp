@@ -1,4 +1,4 @@
-#include "types.h"
+#include "values.h"
 
 #include <string.h>
 

@@ -1,0 +1,324 @@
+// The declaration DSL a sketch writes inside HUBWIRE_CHANNELS (declare.h): expose(), control(),
+// action(), event() and device(), each a constexpr Decl whose options (writable(), range(),
+// unit(), failsafe() ...) return a changed copy; a declaration that cannot work fails to compile
+// here, saying why. declared() gathers them into a list for tables.h.
+#ifndef HUBWIRE_CHANNELS_DSL_H
+#define HUBWIRE_CHANNELS_DSL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../config.h"
+#include "../wire/messages.h"
+#include "../wire/values.h"
+#include "channel.h"
+#include "json.h"
+
+namespace hubwire {
+namespace declare {
+
+// The value a range or failsafe takes: the channel's scalar type, or NotNumeric where none applies.
+struct NotNumeric {
+  constexpr NotNumeric() {}
+};
+struct StructValue : NotNumeric {  // marks a struct channel: its layout text is copied to flash
+  constexpr StructValue() {}
+};
+template <typename T>
+struct IsNumeric {
+  static const bool value = true;
+};
+template <>
+struct IsNumeric<NotNumeric> {
+  static const bool value = false;
+};
+template <>
+struct IsNumeric<StructValue> {
+  static const bool value = false;
+};
+
+enum Kind : uint8_t { kVariable, kControl, kAction, kEvent };
+
+// Set while declaring when a range or failsafe value changes on its way into the channel's type
+// (300 for a uint8_t, -1.5 for an int16_t); Checked<> turns it into a compile error.
+const uint8_t kLossyValue = 0x80;
+
+template <typename T>
+struct IsFloat {
+  static const bool value = false;
+};
+template <>
+struct IsFloat<float> {
+  static const bool value = true;
+};
+template <>
+struct IsFloat<double> {
+  static const bool value = true;
+};
+
+// A range's or failsafe's value as stored, and the comparison the session uses for it.
+template <typename T>
+struct Limits {
+  static constexpr Scalar of(T v) { return ToScalar<T>::of(v); }
+  static constexpr InRange inRange(uint8_t flags) { return flags & (kHasRange | kHasFailsafe) ? &hubwire::inRange<T> : nullptr; }
+  static constexpr bool ordered(T lo, T hi) { return lo <= hi; }
+  // A float channel rounds (0.1 has no exact float); an integer one must keep the value.
+  template <typename U>
+  static constexpr bool fits(U v) { return IsFloat<T>::value || (U)(T)v == v; }
+};
+template <>
+struct Limits<NotNumeric> {
+  static constexpr Scalar of(NotNumeric) { return Scalar(); }
+  static constexpr InRange inRange(uint8_t) { return nullptr; }
+  static constexpr bool ordered(NotNumeric, NotNumeric) { return true; }
+  template <typename U>
+  static constexpr bool fits(U) { return true; }
+};
+template <>
+struct Limits<StructValue> : Limits<NotNumeric> {};
+
+// A range or failsafe a channel does not have writes nothing.
+constexpr Piece number(const char*, NotNumeric) { return empty(); }
+constexpr Piece number(const char*, StructValue) { return empty(); }
+
+// ---- one declaration ----
+const uint8_t kPiecesPerChannel = 13;
+
+// T: the scalar type a range or failsafe takes (NotNumeric if none). K: what was declared. Call:
+// the type of the function a control or action calls, kept as itself (a constant expression cannot
+// cast it to a common type) and copied to flash, where its thunk reads it.
+template <typename T, Kind K, typename Call = void (*)()>
+class Decl {
+ public:
+  // Readable by the hub; writes it sends are stored in the variable.
+  constexpr Decl writable() const {
+    static_assert(K == kVariable, "writable(): only a variable declared with expose() can be written by the hub");
+    return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, call_);
+  }
+  constexpr Decl streamable() const {
+    static_assert(K == kVariable, "streamable(): only a variable declared with expose() can be streamed");
+    return Decl(*this, unit_, description_, (uint8_t)(access_ | kStreamable), flags_, lo_, hi_, failsafe_, call_);
+  }
+  // Writes (a control's or action's argument) outside [min, max], any element of an array, are
+  // refused with NAK OUT_OF_RANGE.
+  template <typename U>
+  constexpr Decl range(U min, U max) const {
+    static_assert(K != kEvent, "range(): an event has no range (the sketch sets its value)");
+    static_assert(K == kEvent || IsNumeric<T>::value, "range(): only a number (or an array of numbers) has a range");
+    return Decl(*this, unit_, description_, access_,
+                (uint8_t)(flags_ | kHasRange | (Limits<T>::fits(min) && Limits<T>::fits(max) ? 0 : kLossyValue)),
+                (T)min, (T)max, failsafe_, call_);
+  }
+  constexpr Decl unit(const char* u) const {
+    return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, call_);
+  }
+  constexpr Decl describe(const char* d) const {
+    return Decl(*this, unit_, d, access_, flags_, lo_, hi_, failsafe_, call_);
+  }
+  // When the link is lost the variable (every element of an array) is set to this, or the
+  // control's function is called with it.
+  template <typename U>
+  constexpr Decl failsafe(U value) const {
+    static_assert(K == kVariable || K == kControl, "failsafe(): only a variable or a control has a failsafe value");
+    static_assert(!(K == kVariable || K == kControl) || IsNumeric<T>::value,
+                  "failsafe(): only a number (or an array of numbers) has a failsafe value");
+    return Decl(*this, unit_, description_, access_,
+                (uint8_t)(flags_ | kHasFailsafe | (Limits<T>::fits(value) ? 0 : kLossyValue)), lo_, hi_, (T)value,
+                call_);
+  }
+  // Called after the hub wrote a new value into the variable (kept where a control's function is).
+  constexpr Decl onChange(void (*fn)()) const {
+    static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
+    return Decl(*this, unit_, description_, access_, flags_, lo_, hi_, failsafe_, fn);
+  }
+
+  // Everything below is for HUBWIRE_CHANNELS.
+  constexpr Decl(const char* name, const char* layout, void* data, TypeCode code, uint8_t count,
+                 TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0)
+      : memSize_(memSize), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data),
+        call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
+        flags_(0), lo_(), hi_(), failsafe_() {}
+
+  // The k-th piece of this channel's JSON, as channel id.
+  constexpr Piece piece(uint8_t k, uint8_t id) const {
+    return k == 0 ? integer(id > 1 ? ",{\"id\":" : "{\"id\":", id)
+         : k == 1 ? quoted(",\"n\":\"", name_)
+         : k == 2 ? Piece{",\"a\":\"", kAccessLetters, access_, 0, "", "\""}
+         : k == 3 ? typeNamed(",\"t\":\"", code_)
+         : k == 4 ? (count_ ? integer(",\"c\":", count_) : empty())
+         : k == 5 ? (layout_ ? Piece{",\"f\":[", kFields, 0, 0, layout_, "]"} : empty())
+         : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", ret_) : empty())
+         : k == 7 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
+         : k == 8 ? (flags_ & kHasRange ? number(",\"min\":", lo_) : empty())
+         : k == 9 ? (flags_ & kHasRange ? number(",\"max\":", hi_) : empty())
+         : k == 10 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
+         : k == 11 ? (description_ ? quoted(",\"d\":\"", description_) : empty())
+                   : literal("}");
+  }
+  constexpr size_t jsonLength(uint8_t id, uint8_t k = 0) const {
+    return k == kPiecesPerChannel ? 0 : pieceLength(piece(k, id)) + jsonLength(id, (uint8_t)(k + 1));
+  }
+  constexpr char jsonAt(uint8_t id, size_t i, uint8_t k = 0) const {
+    return i < pieceLength(piece(k, id)) ? pieceAt(piece(k, id), i)
+                                         : jsonAt(id, i - pieceLength(piece(k, id)), (uint8_t)(k + 1));
+  }
+  // What the session needs at run time, given the flash copies it points to: a struct's layout
+  // text and codec (named only for structs: a sketch without them links none), the function a
+  // control or action calls or a variable's onChange, the range and failsafe values.
+  constexpr ChannelInfo info(const char* layout, StructCodec structs, const void* call, const ChannelLimits* limits) const {
+    return ChannelInfo{ValueType{code_, count_, Text(layout, true), structs}, ret_, data_, call, thunk_, limits,
+                       access_, flags_};
+  }
+  constexpr ChannelLimits limits() const {
+    return ChannelLimits{Limits<T>::inRange(flags_), Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_)};
+  }
+  constexpr bool hasLimits() const { return flags_ & (kHasRange | kHasFailsafe); }
+  constexpr const char* unitText() const { return unit_; }
+  constexpr const char* descriptionText() const { return description_; }
+  constexpr bool valuesFit() const { return !(flags_ & kLossyValue); }
+  constexpr bool rangeOrdered() const { return !(flags_ & kHasRange) || Limits<T>::ordered(lo_, hi_); }
+  constexpr const char* layout() const { return layout_; }
+  constexpr const char* name() const { return name_; }
+  constexpr Call call() const { return call_; }
+  constexpr uint16_t memSize() const { return memSize_; }
+
+ private:
+  constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
+                 T failsafe, Call call)
+      : memSize_(d.memSize_), name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
+        call_(call), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
+        ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
+
+  uint16_t memSize_;  // structs: sizeof the struct, to check the layout against
+  const char* name_;
+  const char* layout_;
+  const char* unit_;
+  const char* description_;
+  void* data_;
+  Call call_;
+  Thunk thunk_;
+  TypeCode code_;
+  uint8_t count_;
+  TypeCode ret_;
+  uint8_t access_;
+  uint8_t flags_;
+  T lo_, hi_, failsafe_;
+};
+
+// ---- the declarations ----
+template <typename T, size_t Bytes>
+constexpr bool checkValue() {
+  static_assert(TypeOf<T>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+  static_assert(Bytes + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "value larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  return true;
+}
+template <typename R>
+constexpr bool checkReturn() {
+  static_assert(TypeOf<R>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+  static_assert(sizeof(R) <= HUBWIRE_MAX_RETURN, "return value larger than HUBWIRE_MAX_RETURN: raise it");
+  return true;
+}
+
+// A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
+template <typename T>
+constexpr Decl<T, kVariable> expose(const char* name, T& var) {
+  return checkValue<T, sizeof(T)>(), Decl<T, kVariable>(name, nullptr, &var, TypeOf<T>::code, 0, kVoid, kReadable, nullptr, nullptr);
+}
+template <typename T, size_t N>
+constexpr Decl<T, kVariable> expose(const char* name, T (&arr)[N]) {
+  static_assert(N <= 255, "arrays hold at most 255 elements");
+  return checkValue<T, sizeof(arr)>(), Decl<T, kVariable>(name, nullptr, arr, TypeOf<T>::code, (uint8_t)N, kVoid, kReadable, nullptr, nullptr);
+}
+template <size_t N>
+constexpr Decl<NotNumeric, kVariable> expose(const char* name, char (&str)[N]) {
+  static_assert(N >= 2 && N <= 256, "a string channel needs a char[2..256] (one byte for the NUL)");
+  static_assert(N + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "string longer than HUBWIRE_MAX_PAYLOAD - 3: raise it");
+  return Decl<NotNumeric, kVariable>(name, nullptr, str, kStr, (uint8_t)(N - 1), kVoid, kReadable, nullptr, nullptr);
+}
+// A struct with named fields, laid out by text such as "ax:f32,ay:f32,gyro:i16[3]".
+template <typename T>
+constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const char* layout) {
+  static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  return Decl<StructValue, kVariable>(name, layout, &var, kStruct, 0, kVoid, kReadable, nullptr, nullptr,
+                                      (uint16_t)sizeof(T));
+}
+
+// A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
+template <typename T>
+constexpr Decl<T, kControl, void (*)(T)> control(const char* name, void (*fn)(T)) {
+  return checkValue<T, sizeof(T)>(), Decl<T, kControl, void (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callVoid<T>);
+}
+template <typename T>
+constexpr Decl<T, kControl, bool (*)(T)> control(const char* name, bool (*fn)(T)) {
+  return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
+}
+
+// A callable action: the hub calls fn with an argument and gets its return value.
+template <typename R, typename A>
+constexpr Decl<A, kAction, R (*)(A)> action(const char* name, R (*fn)(A)) {
+  return checkValue<A, sizeof(A)>(), checkReturn<R>(),
+         Decl<A, kAction, R (*)(A)>(name, nullptr, nullptr, TypeOf<A>::code, 0, TypeOf<R>::code, kCallable, fn, &callRet<R, A>);
+}
+template <typename A>
+constexpr Decl<A, kAction, void (*)(A)> action(const char* name, void (*fn)(A)) {
+  return checkValue<A, sizeof(A)>(), Decl<A, kAction, void (*)(A)>(name, nullptr, nullptr, TypeOf<A>::code, 0, kVoid, kCallable, fn, &callVoid<A>);
+}
+template <typename R>
+constexpr Decl<NotNumeric, kAction, R (*)()> action(const char* name, R (*fn)()) {
+  return checkReturn<R>(), Decl<NotNumeric, kAction, R (*)()>(name, nullptr, nullptr, kVoid, 0, TypeOf<R>::code, kCallable, fn, &callNoArg<R>);
+}
+constexpr Decl<NotNumeric, kAction> action(const char* name, void (*fn)()) {
+  return Decl<NotNumeric, kAction>(name, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
+}
+
+// An event the sketch emits with emit(); the hub is told exactly once.
+template <typename T>
+constexpr Decl<NotNumeric, kEvent> event(const char* name, Event<T>& ev) {
+  static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
+  return checkValue<T, sizeof(T)>(), Decl<NotNumeric, kEvent>(name, nullptr, &ev.id, TypeOf<T>::code, 0, kVoid, kEventAccess, nullptr, nullptr);
+}
+
+// The device itself: its name and, optionally, the firmware version the hub shows.
+struct DeviceName {
+  constexpr DeviceName(const char* n) : name(n), firmwareText(nullptr) {}  // NOLINT: a name alone
+  constexpr DeviceName(const char* n, const char* fw) : name(n), firmwareText(fw) {}
+  constexpr DeviceName firmware(const char* fw) const { return DeviceName(name, fw); }
+  const char* name;
+  const char* firmwareText;
+};
+constexpr DeviceName device(const char* name) { return DeviceName(name); }
+
+// ---- the list of declarations ----
+template <typename... D>
+struct List;
+template <>
+struct List<> {
+  static const uint8_t size = 0;
+};
+template <typename H, typename... R>
+struct List<H, R...> {
+  static const uint8_t size = (uint8_t)(1 + sizeof...(R));
+  H head;
+  List<R...> tail;
+};
+template <typename L>
+struct Declared {
+  static constexpr uint8_t size() { return L::size; }
+  DeviceName dev;
+  L list;
+};
+constexpr List<> listOf() { return List<>{}; }
+template <typename H, typename... R>
+constexpr List<H, R...> listOf(H h, R... r) {
+  return List<H, R...>{h, listOf(r...)};
+}
+template <typename... D>
+constexpr Declared<List<D...> > declared(DeviceName dev, D... d) {
+  static_assert(sizeof...(D) <= HUBWIRE_MAX_CHANNELS, "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
+  return Declared<List<D...> >{dev, listOf(d...)};
+}
+
+}  // namespace declare
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,92 @@
+// A struct channel's layout text, "ax:f32,gyro:i16[3]" (name:type[count] per field, in order),
+// read while the sketch compiles: its size with the board's alignment (checked against sizeof the
+// struct, tables.h) and the descriptor's "f" list it stands for (json.h). Also the type names the
+// descriptor and layouts spell.
+#ifndef HUBWIRE_CHANNELS_LAYOUT_H
+#define HUBWIRE_CHANNELS_LAYOUT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../wire/values.h"
+#include "constexpr_text.h"
+
+namespace hubwire {
+namespace declare {
+
+constexpr const char* typeNameOf(TypeCode t) {
+  return t == kBool ? "bool" : t == kU8 ? "u8" : t == kI8 ? "i8" : t == kU16 ? "u16" : t == kI16 ? "i16"
+       : t == kU32 ? "u32" : t == kI32 ? "i32" : t == kF32 ? "f32" : t == kF64 ? "f64" : t == kStr ? "str"
+       : t == kStruct ? "struct" : "void";
+}
+constexpr size_t scalarBytes(TypeCode t) { return t == kVoid || t > kF64 ? 0 : t <= kI8 ? 1 : t <= kI16 ? 2 : t <= kF32 ? 4 : 8; }
+
+// A struct layout "ax:f32,gyro:i16[3]" becomes {"n":"ax","t":"f32"},{"n":"gyro","t":"i16","c":3}:
+// each character of the layout stands for a short run of JSON.
+constexpr bool fieldStart(const char* s, size_t j) { return j == 0 || s[j - 1] == ','; }
+constexpr const char* fieldRun(const char* s, size_t j) {  // what goes before the character itself
+  return s[j] == ':' ? "\",\"t\":\"" : s[j] == '[' ? "\",\"c\":" : s[j] == ']' ? "}" : s[j] == ',' ? (s[j - 1] == ']' ? "," : "\"},")
+       : fieldStart(s, j) ? "{\"n\":\"" : "";
+}
+constexpr bool fieldKeepsChar(char c) { return c != ':' && c != '[' && c != ']' && c != ','; }
+constexpr size_t fieldLength(const char* s, size_t j) { return cx::length(fieldRun(s, j)) + (fieldKeepsChar(s[j]) ? 1 : 0); }
+constexpr const char* fieldsEnd(const char* s, size_t n) { return n && s[n - 1] == ']' ? "" : "\"}"; }
+constexpr size_t fieldsLength(const char* s, size_t j = 0) {
+  return s[j] ? fieldLength(s, j) + fieldsLength(s, j + 1) : cx::length(fieldsEnd(s, j));
+}
+constexpr char fieldsAt(const char* s, size_t i, size_t j = 0) {
+  return !s[j] ? fieldsEnd(s, j)[i]
+       : i < fieldLength(s, j) ? (i < cx::length(fieldRun(s, j)) ? fieldRun(s, j)[i] : s[j])
+                               : fieldsAt(s, i - fieldLength(s, j), j + 1);
+}
+
+// A layout's size in memory, with the alignment the board gives each field (so that it can be
+// compared with sizeof the struct), or kBadLayout when the text is malformed.
+const size_t kBadLayout = 0xFFFF;
+constexpr bool typeNameAt(const char* s, size_t j, const char* n) {
+  return *n == 0 ? (s[j] == 0 || s[j] == ',' || s[j] == '[') : s[j] == *n && typeNameAt(s, j + 1, n + 1);
+}
+constexpr TypeCode layoutTypeAt(const char* s, size_t j, uint8_t t = kBool) {
+  return t > kF64 ? kVoid : typeNameAt(s, j, typeNameOf((TypeCode)t)) ? (TypeCode)t : layoutTypeAt(s, j, (uint8_t)(t + 1));
+}
+constexpr size_t colonAt(const char* s, size_t j) { return s[j] == 0 || s[j] == ':' || s[j] == ',' ? j : colonAt(s, j + 1); }
+constexpr size_t digitsEnd(const char* s, size_t j) { return s[j] >= '0' && s[j] <= '9' ? digitsEnd(s, j + 1) : j; }
+constexpr size_t numberIn(const char* s, size_t j, size_t end, size_t acc = 0) {
+  return j == end ? acc : numberIn(s, j + 1, end, acc * 10 + (size_t)(s[j] - '0'));
+}
+constexpr size_t alignOfType(TypeCode t) {
+  return t == kU16 || t == kI16 ? alignof(uint16_t) : t == kU32 || t == kI32 ? alignof(uint32_t)
+       : t == kF32 ? alignof(float) : t == kF64 ? alignof(double) : 1;
+}
+constexpr size_t alignUp(size_t v, size_t a) { return (v + a - 1) / a * a; }
+constexpr size_t maxOf(size_t a, size_t b) { return a > b ? a : b; }
+// The field whose type name starts at t (after its colon) ends at e: a count "[n]" or nothing.
+constexpr size_t countEnd(const char* s, size_t e) { return s[e] == '[' ? digitsEnd(s, e + 1) : e; }
+constexpr bool countOk(const char* s, size_t e) {
+  return s[e] != '[' || (s[countEnd(s, e)] == ']' && numberIn(s, e + 1, countEnd(s, e)) >= 1 &&
+                         numberIn(s, e + 1, countEnd(s, e)) <= 255);
+}
+constexpr size_t countOf(const char* s, size_t e) { return s[e] == '[' ? numberIn(s, e + 1, countEnd(s, e)) : 1; }
+constexpr size_t fieldEnd(const char* s, size_t e) { return s[e] == '[' ? countEnd(s, e) + 1 : e; }
+constexpr size_t typeEnd(const char* s, size_t t) { return t + cx::length(typeNameOf(layoutTypeAt(s, t))); }
+constexpr size_t layoutSizeAfter(const char* s, size_t next, size_t off, size_t maxAlign);
+constexpr size_t layoutFieldSize(const char* s, size_t j, size_t off, size_t maxAlign) {
+  return s[colonAt(s, j)] != ':' || colonAt(s, j) == j || layoutTypeAt(s, colonAt(s, j) + 1) == kVoid ||
+                 !countOk(s, typeEnd(s, colonAt(s, j) + 1))
+             ? kBadLayout
+             : layoutSizeAfter(s, fieldEnd(s, typeEnd(s, colonAt(s, j) + 1)),
+                               alignUp(off, alignOfType(layoutTypeAt(s, colonAt(s, j) + 1))) +
+                                   scalarBytes(layoutTypeAt(s, colonAt(s, j) + 1)) * countOf(s, typeEnd(s, colonAt(s, j) + 1)),
+                               maxOf(maxAlign, alignOfType(layoutTypeAt(s, colonAt(s, j) + 1))));
+}
+constexpr size_t layoutSizeAfter(const char* s, size_t next, size_t off, size_t maxAlign) {
+  return s[next] == 0 ? alignUp(off, maxAlign)
+       : s[next] == ',' && s[next + 1] != 0 ? layoutFieldSize(s, next + 1, off, maxAlign)
+                                            : kBadLayout;
+}
+constexpr size_t layoutSize(const char* s) { return *s ? layoutFieldSize(s, 0, 0, 1) : kBadLayout; }
+
+}  // namespace declare
+}  // namespace hubwire
+
+#endif

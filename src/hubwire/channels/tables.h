@@ -1,0 +1,276 @@
+// The flash tables a declaration list becomes, and their checks: the descriptor JSON as char
+// arrays laid end to end, its hash, one ChannelInfo per channel and the copies it points to (a
+// struct's layout, the function called, range and failsafe values). table() checks what needs the
+// whole list (names unique, texts short, descriptor size) and returns the ChannelTable begin() takes.
+#ifndef HUBWIRE_CHANNELS_TABLES_H
+#define HUBWIRE_CHANNELS_TABLES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../wire/messages.h"
+#include "channel.h"
+#include "constexpr_text.h"
+#include "dsl.h"
+
+namespace hubwire {
+namespace declare {
+
+// Names as the descriptor allows them (docs/PROTOCOL.md 7): [A-Za-z_][A-Za-z0-9_]*, 1..32 long.
+constexpr bool nameStart(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; }
+constexpr bool nameRest(const char* s, size_t n = 1) {
+  return *s == 0 ? n <= 32 : (nameStart(*s) || (*s >= '0' && *s <= '9')) && nameRest(s + 1, n + 1);
+}
+constexpr bool validName(const char* s) { return nameStart(*s) && nameRest(s + 1); }
+
+// Texts (units, descriptions, names) are worked on by recursion, one level per character: past
+// kMaxText the compiler would stop with an unclear "evaluation depth" error, so they are checked
+// first, four characters a level.
+const size_t kMaxText = 255;
+constexpr bool shortText(const char* s, size_t n = 0) {
+  return !s || n > kMaxText ? !s : !s[n] || !s[n + 1] || !s[n + 2] || !s[n + 3] || shortText(s, n + 4);
+}
+template <typename T, Kind K, typename C>
+constexpr bool textsShort(const Decl<T, K, C>& d) {
+  return shortText(d.name()) && shortText(d.unitText()) && shortText(d.descriptionText()) && shortText(d.layout());
+}
+constexpr bool allTextsShort(const List<>&) { return true; }
+template <typename H, typename... R>
+constexpr bool allTextsShort(const List<H, R...>& l) {
+  return textsShort(l.head) && allTextsShort(l.tail);
+}
+
+// Is no channel in l called name? Are all names in l different?
+constexpr bool noneNamed(const List<>&, const char*) { return true; }
+template <typename H, typename... R>
+constexpr bool noneNamed(const List<H, R...>& l, const char* name) {
+  return !cx::equal(l.head.name(), name) && noneNamed(l.tail, name);
+}
+constexpr bool namesUnique(const List<>&) { return true; }
+template <typename H, typename... R>
+constexpr bool namesUnique(const List<H, R...>& l) {
+  return noneNamed(l.tail, l.head.name()) && namesUnique(l.tail);
+}
+
+// The i-th declaration of a list (0-based).
+template <size_t I>
+struct At {
+  template <typename L>
+  static constexpr auto of(const L& l) -> decltype(At<I - 1>::of(l.tail)) {
+    return At<I - 1>::of(l.tail);
+  }
+};
+template <>
+struct At<0> {
+  template <typename L>
+  static constexpr auto of(const L& l) -> decltype(l.head) {
+    return l.head;
+  }
+};
+
+// The I-th declaration of a sketch's list, looked up once: At<I> walks the list, which every
+// character of the JSON (or every use) repeating it would make cost n^2 while compiling.
+template <typename D, const D* Decls, size_t I>
+struct DeclAt {
+  typedef decltype(At<I>::of(Decls->list)) Type;
+  static constexpr Type decl = At<I>::of(Decls->list);
+};
+template <typename D, const D* Decls, size_t I>
+constexpr typename DeclAt<D, Decls, I>::Type DeclAt<D, Decls, I>::decl;
+
+// ---- the descriptor in flash: one char array per part, laid end to end (no padding between
+// char arrays), so that no character is computed twice and no recursion runs the whole length ----
+// P has constexpr static length() and at(i).
+template <typename P, typename S = typename cx::MakeSeq<P::length()>::type>
+struct Chars;
+template <typename P, size_t... I>
+struct Chars<P, cx::Seq<I...> > {
+  char c[sizeof...(I)];
+  static constexpr Chars make() { return Chars{{P::at(I)...}}; }
+};
+
+template <typename D, const D* Decls>
+struct HeadPart {
+  static constexpr Piece piece(uint8_t k) {
+    return k == 0 ? integer("{\"p\":", kProtocolVersion)
+         : k == 1 ? quoted(",\"n\":\"", Decls->dev.name)
+         : k == 2 ? (Decls->dev.firmwareText ? quoted(",\"fw\":\"", Decls->dev.firmwareText) : empty())
+                  : literal(",\"ch\":[");
+  }
+  static constexpr size_t length(uint8_t k = 0) { return k == 4 ? 0 : pieceLength(piece(k)) + length((uint8_t)(k + 1)); }
+  static constexpr char at(size_t i, uint8_t k = 0) {
+    return i < pieceLength(piece(k)) ? pieceAt(piece(k), i) : at(i - pieceLength(piece(k)), (uint8_t)(k + 1));
+  }
+};
+template <typename D, const D* Decls, size_t I>
+struct ChannelPart {
+  static constexpr size_t length() { return DeclAt<D, Decls, I>::decl.jsonLength((uint8_t)(I + 1)); }
+  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.jsonAt((uint8_t)(I + 1), i); }
+};
+struct TailPart {
+  static constexpr size_t length() { return 2; }
+  static constexpr char at(size_t i) { return "]}"[i]; }
+};
+
+template <typename D, const D* Decls, typename S>
+struct Channels;
+template <typename D, const D* Decls>
+struct Channels<D, Decls, cx::Seq<> > {
+  Chars<TailPart> tail;
+  static constexpr Channels make() { return Channels{Chars<TailPart>::make()}; }
+};
+template <typename D, const D* Decls, size_t I, size_t... R>
+struct Channels<D, Decls, cx::Seq<I, R...> > {
+  Chars<ChannelPart<D, Decls, I> > first;
+  Channels<D, Decls, cx::Seq<R...> > rest;
+  static constexpr Channels make() {
+    return Channels{Chars<ChannelPart<D, Decls, I> >::make(), Channels<D, Decls, cx::Seq<R...> >::make()};
+  }
+};
+template <typename D, const D* Decls>
+struct JsonText {
+  Chars<HeadPart<D, Decls> > head;
+  Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> body;
+};
+// value is constexpr where it is declared (the hash reads it while compiling), so it is a member of
+// a class of its own: a class cannot hold a constexpr object of its own, still incomplete, type.
+template <typename D, const D* Decls>
+struct Json {
+  typedef JsonText<D, Decls> Text;
+  static constexpr Text value = {Chars<HeadPart<D, Decls> >::make(), decltype(Text::body)::make()};
+};
+template <typename D, const D* Decls>
+constexpr typename Json<D, Decls>::Text Json<D, Decls>::value HUBWIRE_FLASH;
+
+// The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
+// channel, so that the compiler's depth limit is far away.
+constexpr uint32_t fnvChars(const char* c, size_t n, uint32_t h, size_t i = 0) {
+  return i + 8 <= n ? fnvChars(c, n,
+                               fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(h, (uint8_t)c[i]), (uint8_t)c[i + 1]),
+                                                                   (uint8_t)c[i + 2]), (uint8_t)c[i + 3]),
+                                                       (uint8_t)c[i + 4]), (uint8_t)c[i + 5]), (uint8_t)c[i + 6]),
+                                     (uint8_t)c[i + 7]),
+                               i + 8)
+         : i < n ? fnvChars(c, n, fnv1a(h, (uint8_t)c[i]), i + 1)
+                 : h;
+}
+template <typename D, const D* Decls>
+constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<> >& b, uint32_t h) {
+  return fnvChars(b.tail.c, sizeof(b.tail.c), h);
+}
+template <typename D, const D* Decls, size_t I, size_t... R>
+constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32_t h) {
+  return hashOf(b.rest, fnvChars(b.first.c, sizeof(b.first.c), h));
+}
+
+// A struct channel's layout text, copied into flash for the session's struct codec.
+template <typename D, const D* Decls, size_t I>
+struct LayoutPart {
+  static constexpr size_t length() { return cx::length(DeclAt<D, Decls, I>::decl.layout()) + 1; }
+  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.layout()[i]; }
+};
+template <typename D, const D* Decls, size_t I>
+struct LayoutFlash {
+  static const Chars<LayoutPart<D, Decls, I> > value;
+};
+template <typename D, const D* Decls, size_t I>
+const Chars<LayoutPart<D, Decls, I> > LayoutFlash<D, Decls, I>::value HUBWIRE_FLASH = Chars<LayoutPart<D, Decls, I> >::make();
+
+// The function a control or action calls (or a variable's onChange), kept in flash with its own type.
+template <typename D, const D* Decls, size_t I>
+struct CallFlash {
+  typedef decltype(DeclAt<D, Decls, I>::decl.call()) Fn;
+  static const Fn value;
+};
+template <typename D, const D* Decls, size_t I>
+const typename CallFlash<D, Decls, I>::Fn CallFlash<D, Decls, I>::value HUBWIRE_FLASH = DeclAt<D, Decls, I>::decl.call();
+
+// A channel's range and failsafe values, in flash only for channels that declare them.
+template <typename D, const D* Decls, size_t I>
+struct LimitsFlash {
+  static const ChannelLimits value;
+};
+template <typename D, const D* Decls, size_t I>
+const ChannelLimits LimitsFlash<D, Decls, I>::value HUBWIRE_FLASH = DeclAt<D, Decls, I>::decl.limits();
+
+template <typename T, Kind K, typename C>
+constexpr bool isStruct(const Decl<T, K, C>*) { return false; }
+template <Kind K, typename C>
+constexpr bool isStruct(const Decl<StructValue, K, C>*) { return true; }
+
+// What is checked of every channel (the compiler's message names the channel's index I, from 0).
+template <typename D, const D* Decls, size_t I>
+struct Checked {
+  static_assert(validName(DeclAt<D, Decls, I>::decl.name()),
+                "channel name: letters, digits and _ only, not starting with a digit, at most 32 characters");
+  static_assert(DeclAt<D, Decls, I>::decl.rangeOrdered(), "range(min, max): min is greater than max");
+  static_assert(DeclAt<D, Decls, I>::decl.valuesFit(),
+                "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
+};
+
+// The flash copies a record points to, each instantiated (and so kept) only where it applies.
+template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((typename DeclAt<D, Decls, I>::Type*)nullptr)>
+struct StructOf {
+  static constexpr const char* layout() { return nullptr; }
+  static constexpr StructCodec codec() { return nullptr; }
+};
+template <typename D, const D* Decls, size_t I>
+struct StructOf<D, Decls, I, true> {
+  static_assert(layoutSize(DeclAt<D, Decls, I>::decl.layout()) == DeclAt<D, Decls, I>::decl.memSize(),
+                "struct layout does not match the struct: name:type[count] for every field, in order, "
+                "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
+  static constexpr const char* layout() { return LayoutFlash<D, Decls, I>::value.c; }
+  static constexpr StructCodec codec() { return &structCodec; }
+};
+template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.call() != nullptr>
+struct CallOf {
+  static constexpr const void* get() { return nullptr; }
+};
+template <typename D, const D* Decls, size_t I>
+struct CallOf<D, Decls, I, true> {
+  static constexpr const void* get() { return &CallFlash<D, Decls, I>::value; }
+};
+template <typename D, const D* Decls, size_t I, bool HasLimits = DeclAt<D, Decls, I>::decl.hasLimits()>
+struct LimitsOf {
+  static constexpr const ChannelLimits* get() { return nullptr; }
+};
+template <typename D, const D* Decls, size_t I>
+struct LimitsOf<D, Decls, I, true> {
+  static constexpr const ChannelLimits* get() { return &LimitsFlash<D, Decls, I>::value; }
+};
+
+template <typename D, const D* Decls, size_t I>
+struct InfoOf : Checked<D, Decls, I> {
+  static constexpr ChannelInfo make() {
+    return DeclAt<D, Decls, I>::decl.info(StructOf<D, Decls, I>::layout(), StructOf<D, Decls, I>::codec(),
+                                       CallOf<D, Decls, I>::get(), LimitsOf<D, Decls, I>::get());
+  }
+};
+
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>
+struct Infos;
+template <typename D, const D* Decls, size_t... I>
+struct Infos<D, Decls, cx::Seq<I...> > {
+  static const ChannelInfo value[sizeof...(I) ? sizeof...(I) : 1];
+};
+template <typename D, const D* Decls, size_t... I>
+const ChannelInfo Infos<D, Decls, cx::Seq<I...> >::value[sizeof...(I) ? sizeof...(I) : 1] HUBWIRE_FLASH = {
+    InfoOf<D, Decls, I>::make()...};
+
+template <typename D, const D* Decls>
+constexpr ChannelTable table() {
+  static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
+                "a name, unit, description, layout or firmware text longer than 255 characters");
+  static_assert(namesUnique(Decls->list), "two channels have the same name");
+  static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
+  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
+                      hashOf(Json<D, Decls>::value.body,
+                             fnvChars(Json<D, Decls>::value.head.c, sizeof(Json<D, Decls>::value.head.c), kFnvOffset)),
+                      Infos<D, Decls>::value,
+                      D::size()};
+}
+
+}  // namespace declare
+}  // namespace hubwire
+
+#endif
