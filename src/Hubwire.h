@@ -25,9 +25,9 @@
 //
 // HUBWIRE_CHANNELS turns the declarations into the descriptor JSON and one record per channel,
 // constants in flash, so a channel costs no RAM and a wrong declaration fails to compile. The
-// declarations and their options are in src/hubwire/channels/declare.h; the session is
-// src/hubwire/session/session.h (class hubwire::Session, which Hubwire extends); the protocol is in
-// docs/PROTOCOL.md.
+// declarations and their options are in src/hubwire/channels/dsl.h (declare.h gathers them); the
+// session is src/hubwire/session/session.h (class hubwire::Session, which Hubwire extends); the
+// protocol is in docs/PROTOCOL.md.
 #ifndef HUBWIRE_H
 #define HUBWIRE_H
 
@@ -41,23 +41,31 @@ namespace hubwire {
 // The core's seam bound to an Arduino Stream and millis() (functions in HubwireArduino.cpp).
 class Port {
  public:
+  /// The port over stream; Hubwire makes its own, a sketch need not.
+  ///   hubwire::Port port(Serial);
   explicit Port(Stream& s) : stream(s), mostRoom(0) {}
   Stream& stream;
   uint8_t mostRoom;  // the most availableForWrite() has reported (255 and more count as 255)
 };
 
-// Seeds the session nonce: differs between resets (a counter that survives them) and, where the
-// board has one, comes from a hardware RNG. See Session::begin().
+/// Seeds the session nonce: differs between resets (a counter that survives them) and, where the
+/// board has one, comes from a hardware RNG. See Session::begin().
+///   session.begin(channels, hubwire::bootNonce());
 uint32_t bootNonce();
 
 }  // namespace hubwire
 
 class Hubwire : private hubwire::Port, public hubwire::Session {
  public:
-  // Any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
+  /// A hub link over any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
+  ///   Hubwire hub(Serial);
   explicit Hubwire(Stream& stream) : hubwire::Port(stream), hubwire::Session(*static_cast<hubwire::Port*>(this)) {}
+  // One Hubwire per Stream: a copy would share the Stream and answer the hub twice.
+  Hubwire(const Hubwire&) = delete;
+  Hubwire& operator=(const Hubwire&) = delete;
 
-  // Starts talking, with the channels HUBWIRE_CHANNELS declared.
+  /// Starts talking, with the channels HUBWIRE_CHANNELS declared; false for an empty table.
+  ///   void setup() { Serial.begin(115200); hub.begin(channels); }
   bool begin(const hubwire::ChannelTable& channels) { return hubwire::Session::begin(channels, hubwire::bootNonce()); }
 };
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <deque>
+#include <type_traits>
 #include <vector>
 
 #include "Hubwire.h"
@@ -128,6 +129,12 @@ TEST(ArduinoFace, SamplesGoWhenThePortNeverReportsRoom) {
 
 uint32_t millis() { return nowMs; }
 uint32_t micros() { return nowMs * 1000u; }
+
+// One session per port: copying one (which would answer the same hub twice) does not compile.
+TEST(Copying, IsRefused) {
+  EXPECT_FALSE(std::is_copy_constructible<Hubwire>::value);
+  EXPECT_FALSE(std::is_copy_assignable<Hubwire>::value);
+}
 
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <type_traits>
 
 #include <nlohmann/json.hpp>
 
@@ -940,6 +941,12 @@ TEST(JsonNumbers, ReadBackAsTheSameFloat) {
 }
 
 }  // namespace
+
+// One session per port: copying one (which would answer the same hub twice) does not compile.
+TEST(Copying, IsRefused) {
+  EXPECT_FALSE(std::is_copy_constructible<hubwire::Session>::value);
+  EXPECT_FALSE(std::is_copy_assignable<hubwire::Session>::value);
+}
 
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);

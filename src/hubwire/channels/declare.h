@@ -16,8 +16,9 @@
 #include "dsl.h"
 #include "tables.h"
 
-// Declares a sketch's channels at file scope; `var` is then what begin() takes. Between the device
-// and its channels: expose(), control(), action() and event() (see above), with their options.
+/// Declares a sketch's channels at file scope; `var` is then what begin() takes. After the device:
+/// expose(), control(), action() and event() (dsl.h), with their options.
+///   HUBWIRE_CHANNELS(channels, "minimal", expose("blink_ms", blinkMs).writable(), event("button", button));
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \

@@ -90,17 +90,21 @@ const uint8_t kPiecesPerChannel = 13;
 template <typename T, Kind K, typename Call = void (*)()>
 class Decl {
  public:
-  // Readable by the hub; writes it sends are stored in the variable.
+  /// Readable and writable by the hub; writes it sends are stored in the variable.
+  ///   expose("speed", speed).writable()
   constexpr Decl writable() const {
     static_assert(K == kVariable, "writable(): only a variable declared with expose() can be written by the hub");
     return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, call_);
   }
+  /// The hub may subscribe to samples of it at an interval.
+  ///   expose("battery", batteryMv).streamable()
   constexpr Decl streamable() const {
     static_assert(K == kVariable, "streamable(): only a variable declared with expose() can be streamed");
     return Decl(*this, unit_, description_, (uint8_t)(access_ | kStreamable), flags_, lo_, hi_, failsafe_, call_);
   }
-  // Writes (a control's or action's argument) outside [min, max], any element of an array, are
-  // refused with NAK OUT_OF_RANGE.
+  /// Writes (a control's or action's argument) outside [min, max], any element of an array, are
+  /// refused with NAK OUT_OF_RANGE.
+  ///   expose("speed", speed).writable().range(-1.0f, 1.0f)
   template <typename U>
   constexpr Decl range(U min, U max) const {
     static_assert(K != kEvent, "range(): an event has no range (the sketch sets its value)");
@@ -109,14 +113,19 @@ class Decl {
                 (uint8_t)(flags_ | kHasRange | (Limits<T>::fits(min) && Limits<T>::fits(max) ? 0 : kLossyValue)),
                 (T)min, (T)max, failsafe_, call_);
   }
+  /// The unit the hub shows.
+  ///   expose("range", rangeCm).unit("cm")
   constexpr Decl unit(const char* u) const {
     return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, call_);
   }
+  /// A description the hub shows.
+  ///   action("beep", beep).describe("beep for ms (max 2000)")
   constexpr Decl describe(const char* d) const {
     return Decl(*this, unit_, d, access_, flags_, lo_, hi_, failsafe_, call_);
   }
-  // When the link is lost the variable (every element of an array) is set to this, or the
-  // control's function is called with it.
+  /// When the link is lost the variable (every element of an array) is set to this, or the
+  /// control's function is called with it.
+  ///   expose("left", left).writable().failsafe(0.0f)
   template <typename U>
   constexpr Decl failsafe(U value) const {
     static_assert(K == kVariable || K == kControl, "failsafe(): only a variable or a control has a failsafe value");
@@ -126,7 +135,8 @@ class Decl {
                 (uint8_t)(flags_ | kHasFailsafe | (Limits<T>::fits(value) ? 0 : kLossyValue)), lo_, hi_, (T)value,
                 call_);
   }
-  // Called after the hub wrote a new value into the variable (kept where a control's function is).
+  /// Called after the hub wrote a new value into the variable (kept where a control's function is).
+  ///   expose("led", led).writable().onChange(ledChanged)
   constexpr Decl onChange(void (*fn)()) const {
     static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
     return Decl(*this, unit_, description_, access_, flags_, lo_, hi_, failsafe_, fn);
@@ -219,7 +229,8 @@ constexpr bool checkReturn() {
   return true;
 }
 
-// A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
+/// A variable (scalar, fixed array, char[] string): readable; options make it writable etc.
+///   expose("battery", batteryMv)
 template <typename T>
 constexpr Decl<T, kVariable> expose(const char* name, T& var) {
   return checkValue<T, sizeof(T)>(), Decl<T, kVariable>(name, nullptr, &var, TypeOf<T>::code, 0, kVoid, kReadable, nullptr, nullptr);
@@ -235,7 +246,8 @@ constexpr Decl<NotNumeric, kVariable> expose(const char* name, char (&str)[N]) {
   static_assert(N + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "string longer than HUBWIRE_MAX_PAYLOAD - 3: raise it");
   return Decl<NotNumeric, kVariable>(name, nullptr, str, kStr, (uint8_t)(N - 1), kVoid, kReadable, nullptr, nullptr);
 }
-// A struct with named fields, laid out by text such as "ax:f32,ay:f32,gyro:i16[3]".
+/// A struct with named fields, laid out by text (name:type[count] per field, in order).
+///   expose("imu", imu, "ax:f32,ay:f32,az:f32,gyro:i16[3]")
 template <typename T>
 constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const char* layout) {
   static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
@@ -243,7 +255,8 @@ constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const ch
                                       (uint16_t)sizeof(T));
 }
 
-// A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
+/// A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
+///   control("led", setLed)
 template <typename T>
 constexpr Decl<T, kControl, void (*)(T)> control(const char* name, void (*fn)(T)) {
   return checkValue<T, sizeof(T)>(), Decl<T, kControl, void (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callVoid<T>);
@@ -253,7 +266,8 @@ constexpr Decl<T, kControl, bool (*)(T)> control(const char* name, bool (*fn)(T)
   return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
 }
 
-// A callable action: the hub calls fn with an argument and gets its return value.
+/// A callable action: the hub calls fn with an argument (or none) and gets its return value.
+///   action("beep", beep)
 template <typename R, typename A>
 constexpr Decl<A, kAction, R (*)(A)> action(const char* name, R (*fn)(A)) {
   return checkValue<A, sizeof(A)>(), checkReturn<R>(),
@@ -271,14 +285,16 @@ constexpr Decl<NotNumeric, kAction> action(const char* name, void (*fn)()) {
   return Decl<NotNumeric, kAction>(name, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
 }
 
-// An event the sketch emits with emit(); the hub is told exactly once.
+/// An event the sketch emits with emit(); the hub is told exactly once.
+///   event("bumper", bumper)
 template <typename T>
 constexpr Decl<NotNumeric, kEvent> event(const char* name, Event<T>& ev) {
   static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
   return checkValue<T, sizeof(T)>(), Decl<NotNumeric, kEvent>(name, nullptr, &ev.id, TypeOf<T>::code, 0, kVoid, kEventAccess, nullptr, nullptr);
 }
 
-// The device itself: its name and, optionally, the firmware version the hub shows.
+/// The device itself: its name and, optionally, the firmware version the hub shows.
+///   HUBWIRE_CHANNELS(channels, device("rover").firmware("1.0.0"), ...)
 struct DeviceName {
   constexpr DeviceName(const char* n) : name(n), firmwareText(nullptr) {}  // NOLINT: a name alone
   constexpr DeviceName(const char* n, const char* fw) : name(n), firmwareText(fw) {}

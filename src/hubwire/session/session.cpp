@@ -7,7 +7,6 @@ namespace hubwire {
 namespace {
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
 const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: the sender stopped
-const uint16_t kMaxStreamIntervalMs = 60000;
 }  // namespace
 
 Session::Session(Port& port)
@@ -114,7 +113,7 @@ void Session::update() {
     return;
   }
   if (!beatSent_ || (uint16_t)(now - lastSent_) >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat(now);
-  if (eventCount_ && (!eventInFlight_ || (uint16_t)(now - eventSentAt_) >= HUBWIRE_EVENT_RETRY_MS)) sendEvent(now);
+  if (events_.due(now)) sendEvent(now);
   sendSamples(now);
 }
 
@@ -197,7 +196,7 @@ void Session::onHello(const Frame& f) {
     linked_ = true;
     beatSent_ = false;
     // Send the head event again right away, with its seq: the hub may have delivered it already.
-    eventSentAt_ = (uint16_t)(ms() - HUBWIRE_EVENT_RETRY_MS);
+    events_.retryNow(ms());
     if (onLinkUp_) onLinkUp_();
   }
 }
@@ -207,7 +206,7 @@ void Session::newHubSession(uint32_t nonce) {
   hubNonce_ = nonce;
   lastTxnValid_ = false;
 #if HUBWIRE_MAX_STREAMS > 0
-  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
+  streams_.clear();
 #endif
 }
 
@@ -215,7 +214,7 @@ void Session::loseLink() {
   linked_ = false;
   applyFailsafes();
 #if HUBWIRE_MAX_STREAMS > 0
-  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) streams_[i].id = 0;
+  streams_.clear();
 #endif
   lastSent_ = ms();
   if (onLinkLost_) onLinkLost_();
@@ -223,10 +222,7 @@ void Session::loseLink() {
 
 void Session::onAck(const Frame& f, bool nak) {
   (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
-  if (!eventInFlight_ || f.seq != eventSeq_ || f.id != events_[eventHead_].id) return;
-  eventInFlight_ = false;
-  eventHead_ = (uint8_t)((eventHead_ + 1) % HUBWIRE_EVENT_QUEUE);
-  --eventCount_;
+  events_.acked(f.seq, f.id);
 }
 
 void Session::onChunk(const Frame& f) {
@@ -305,29 +301,7 @@ void Session::onSubscribe(const Frame& f) {
   if (f.len != 2 || ch.type.wireSize() + kSampleHeader > maxOut()) return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
-  uint16_t now = ms();
-  Subscription* slot = nullptr;
-  for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
-    if (streams_[i].id == f.id) slot = &streams_[i];
-  }
-  if (interval == 0) {
-    if (slot) slot->id = 0;
-  } else {
-    if (!slot) {
-      for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS && !slot; ++i)
-        if (streams_[i].id == 0) slot = &streams_[i];
-      if (!slot) return sendNak(f, kErrBusy);
-      slot->seq = 0;
-      slot->last = now;  // a new subscription: its first sample reports the time since
-    }
-    if (interval < HUBWIRE_MIN_STREAM_INTERVAL_MS) interval = HUBWIRE_MIN_STREAM_INTERVAL_MS;
-    // Elapsed times on the 16-bit clock are caught within 65,536 - interval ms of falling due:
-    // a cap leaves update() seconds, not one millisecond, to see a sample is due.
-    if (interval > kMaxStreamIntervalMs) interval = kMaxStreamIntervalMs;
-    slot->id = f.id;
-    slot->interval = interval;
-    slot->start = (uint16_t)(now - interval);  // the next sample is due now
-  }
+  if (!streams_.subscribe(f.id, interval, ms())) return sendNak(f, kErrBusy);
 #else
   if (interval != 0) return sendNak(f, kErrBusy);
 #endif
@@ -339,8 +313,7 @@ void Session::sendSamples(uint16_t now) {
 #if HUBWIRE_MAX_STREAMS > 0
   for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
     Subscription& s = streams_[i];
-    if (!s.id) continue;
-    if ((uint16_t)(now - s.start) < s.interval) continue;
+    if (!s.due(now)) continue;
     ChannelInfo ch;
     if (!find(s.id, ch)) {
       s.id = 0;
@@ -349,12 +322,9 @@ void Session::sendSamples(uint16_t now) {
     uint8_t* out = tx_.payload();
     uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
     if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
-    storeU16(out, (uint16_t)(now - s.last));
-    tx_.send(port_, kMsgSample, s.seq++, s.id, (uint8_t)(len + kSampleHeader));
-    s.last = now;
-    // Keep the schedule (no drift), unless we fell more than one interval behind.
-    s.start = (uint16_t)(s.start + s.interval);
-    if ((uint16_t)(now - s.start) >= s.interval) s.start = now;
+    storeU16(out, s.since(now));
+    tx_.send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
+    s.sent(now);
   }
 #else
   (void)now;
@@ -362,24 +332,14 @@ void Session::sendSamples(uint16_t now) {
 }
 
 bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
-  if (!started_ || id == 0 || eventCount_ >= HUBWIRE_EVENT_QUEUE) return false;
-  QueuedEvent& e = events_[(eventHead_ + eventCount_) % HUBWIRE_EVENT_QUEUE];
-  e.id = id;
-  e.len = size;
-  memcpy(e.data, value, size);
-  ++eventCount_;
-  return true;
+  if (!started_ || id == 0) return false;
+  return events_.push(id, value, size);
 }
 
 void Session::sendEvent(uint16_t now) {
-  QueuedEvent& e = events_[eventHead_];
-  if (!eventInFlight_) {
-    ++eventSeq_;  // a new event: a new seq. A retry keeps it.
-    eventInFlight_ = true;
-  }
+  const EventQueue::Entry& e = events_.send(now);
   memcpy(tx_.payload(), e.data, e.len);
-  tx_.send(port_, kMsgEvent, eventSeq_, e.id, e.len);
-  eventSentAt_ = now;
+  tx_.send(port_, kMsgEvent, events_.seq(), e.id, e.len);
 }
 
 void Session::sendHello(bool isReply) {

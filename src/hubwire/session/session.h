@@ -18,6 +18,8 @@
 #include "../wire/values.h"
 #include "../channels/channel.h"
 #include "../wire/messages.h"
+#include "event_queue.h"
+#include "streams.h"
 
 namespace hubwire {
 
@@ -46,7 +48,6 @@ struct SessionState {
   bool beatSent_ : 1;       // a heartbeat went out since the link came up
   bool lastTxnValid_ : 1;   // duplicate suppression: lastTxn* describe a transaction
   bool lastTxnControl_ : 1;  // ... which was a control
-  bool eventInFlight_ : 1;  // the head event was sent and awaits its ACK
 
   // One buffer receives and sends frames: an answer is built where its question was (handlers
   // read the question first), and frames of our own wait until no frame is arriving.
@@ -73,61 +74,74 @@ struct SessionState {
   uint8_t replyType_, replyLen_;
   uint8_t replyData_[HUBWIRE_MAX_RETURN];
 
-  // Events: a ring; only the head is in flight.
-  struct QueuedEvent {
-    uint8_t id, len;
-    uint8_t data[HUBWIRE_EVENT_MAX_PAYLOAD];
-  };
-  QueuedEvent events_[HUBWIRE_EVENT_QUEUE];
-  uint8_t eventHead_, eventCount_, eventSeq_;
-  uint16_t eventSentAt_;
-
-  // Subscriptions (id 0 = free slot).
-  // Times are the low 16 bits of millis(). Only elapsed times are compared (now - start, unsigned),
-  // so intervals past 32.8 s work (up to the 60 s granted); a due time compared as signed would not.
-  struct Subscription {
-    uint8_t id, seq;
-    uint16_t interval;
-    uint16_t start;  // the current interval began: a sample is due interval ms after it
-    uint16_t last;   // the previous sample, or the subscription
-  };
+  EventQueue events_;  // the events waiting for the hub's ACK
 #if HUBWIRE_MAX_STREAMS > 0
-  Subscription streams_[HUBWIRE_MAX_STREAMS];
+  Streams streams_;  // the hub's subscriptions
 #endif
 };
 
 class Session : private SessionState {
  public:
+  /// A session over a port (port.h); the Arduino face binds it to a Stream (Hubwire.h).
+  ///   hubwire::Session session(port);
   explicit Session(Port& port);
+  // One session per port: a copy would answer the same hub twice.
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
 
   // ---- running ----
 
-  // Starts the session with the channels HUBWIRE_CHANNELS declared (declare.h; the table is in
-  // flash, where only that macro puts it); false for an empty table. seed should differ between boots where the board can tell (a boot counter, a hardware
-  // RNG); the session nonce also mixes in the moment the hub is first heard, which differs even
-  // when the seed cannot.
+  /// Starts the session with the channels HUBWIRE_CHANNELS declared (the table is in flash,
+  /// where only that macro puts it); false for an empty table. seed should differ between boots
+  /// where the board can tell (a boot counter, a hardware RNG); the session nonce also mixes in
+  /// the moment the hub is first heard, which differs even when the seed cannot.
+  ///   session.begin(channels, bootCounter);
   bool begin(const ChannelTable& channels, uint32_t seed = 0);
-  // Reads what arrived, answers it, sends heartbeats, retries events, streams samples. Never blocks.
+
+  /// Reads what arrived, answers it, sends heartbeats, retries events, streams samples. Never
+  /// blocks; call it from loop().
+  ///   void loop() { session.update(); }
   void update();
 
-  // Queues an event for the hub; false when the queue is full or the event was not declared.
+  /// Queues an event for the hub, delivered exactly once; false when the queue is full or the
+  /// event was not declared.
+  ///   if (!session.emit(bumper, true)) { /* full: emit again later */ }
   template <typename T>
   bool emit(const Event<T>& ev, const typename Same<T>::type& value) {
     return emitRaw(ev.id, &value, sizeof(T));  // a scalar: its memory is its wire form
   }
 
+  /// Called when the hub links (after the handshake).
+  ///   session.onLinkUp(showConnected);
   void onLinkUp(void (*fn)()) { onLinkUp_ = fn; }
-  // The failsafe hook: the hub has gone silent (after channels with failsafe values were reset).
+  /// The failsafe hook: the hub has gone silent (called after channels with failsafe values
+  /// were reset to them).
+  ///   session.onLinkLost(stopMotors);
   void onLinkLost(void (*fn)()) { onLinkLost_ = fn; }
 
+  /// Is a hub linked (handshake done, heard within its heartbeat timeout)?
+  ///   digitalWrite(LED_BUILTIN, session.linked());
   bool linked() const { return linked_; }
-  // This boot's session nonce; 0 until the hub is first heard or the first announcement.
+  /// This boot's session nonce; 0 until the hub is first heard or the first announcement.
+  ///   uint32_t n = session.nonce();
   uint32_t nonce() const { return nonceDrawn_ ? nonce_ : 0; }
+  /// Why begin() refused the channel table, or kSetupOk.
+  ///   if (session.error() != hubwire::kSetupOk) blinkForever();
   SetupError error() const { return started_ ? kSetupOk : kSetupNoDeclarations; }
+  /// How many channels begin() was given.
+  ///   uint8_t n = session.channelCount();
   uint8_t channelCount() const { return table_.count; }
+  /// The descriptor's length in bytes, as hello announces it.
+  ///   uint16_t len = session.descriptorLength();
   uint16_t descriptorLength() const { return table_.jsonLength; }
+  /// The descriptor's FNV-1a hash, as hello announces it.
+  ///   uint32_t h = session.descriptorHash();
   uint32_t descriptorHash() const { return table_.hash; }
-  uint8_t eventsQueued() const { return eventCount_; }
+  /// Events waiting for the hub's ACK.
+  ///   if (session.eventsQueued() == HUBWIRE_EVENT_QUEUE) { /* full */ }
+  uint8_t eventsQueued() const { return events_.size(); }
+  /// The receiver's error counters (bad CRC, overflow, dropped), as heartbeats report them.
+  ///   uint16_t bad = session.counters().crc;
   const LinkCounters& counters() const { return rx_.counters; }
 
  private:

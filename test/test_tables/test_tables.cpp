@@ -1,0 +1,86 @@
+// The flash tables (channels/tables.h): a declared list becomes the descriptor text, its hash and
+// one record per channel, with the copies each record points to; and the checks table() makes.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "hubwire/channels/declare.h"
+
+using namespace hubwire;
+using namespace hubwire::declare;
+
+namespace {
+
+struct Pos {
+  float x;
+  uint8_t ok;
+} pos;
+uint16_t level;
+Event<uint8_t> press;
+void setLamp(bool) {}
+
+}  // namespace
+
+HUBWIRE_CHANNELS(bench, device("bench").firmware("0.1"),
+  expose("level", level).writable().range(1, 9).failsafe(1),
+  expose("pos", pos, "x:f32,ok:u8"),
+  control("lamp", setLamp),
+  event("press", press));
+
+namespace {
+
+std::string text(const ChannelTable& t) { return std::string(t.json, t.jsonLength); }
+
+TEST(Tables, DescriptorTextLengthAndHash) {
+  EXPECT_EQ(text(bench), R"({"p":1,"n":"bench","fw":"0.1","ch":[)"
+                         R"({"id":1,"n":"level","a":"rw","t":"u16","min":1,"max":9,"fs":1},)"
+                         R"({"id":2,"n":"pos","a":"r","t":"struct","f":[{"n":"x","t":"f32"},{"n":"ok","t":"u8"}]},)"
+                         R"({"id":3,"n":"lamp","a":"w","t":"bool"},{"id":4,"n":"press","a":"e","t":"u8"}]})");
+  uint32_t h = kFnvOffset;
+  for (unsigned char c : text(bench)) h = fnv1a(h, c);
+  EXPECT_EQ(bench.hash, h);
+  EXPECT_EQ(bench.count, 4);
+  static_assert(bench.count == 4, "the table is a constant expression");
+}
+
+TEST(Tables, OneRecordPerChannelWithItsFlashCopies) {
+  const ChannelInfo& lv = bench.channels[0];
+  EXPECT_EQ(lv.data, &level);
+  EXPECT_EQ(lv.type.code, kU16);
+  ASSERT_NE(lv.limits, nullptr);
+  EXPECT_EQ(lv.limits->min.bits & 0xFFFF, 1u);
+  EXPECT_EQ(lv.limits->failsafe.bits & 0xFFFF, 1u);
+  EXPECT_EQ(lv.call, nullptr);  // no onChange
+  const ChannelInfo& ps = bench.channels[1];
+  EXPECT_EQ(ps.type.code, kStruct);
+  EXPECT_EQ(ps.limits, nullptr);  // none declared: none in flash
+  EXPECT_EQ(std::string(ps.type.layout.ptr), "x:f32,ok:u8");
+  const ChannelInfo& lamp = bench.channels[2];
+  ASSERT_NE(lamp.call, nullptr);
+  EXPECT_EQ(*(void (*const*)(bool))lamp.call, &setLamp);
+  EXPECT_EQ(bench.channels[3].data, &press.id);
+}
+
+TEST(Tables, NameAndTextChecks) {
+  EXPECT_TRUE(validName("speed_2"));
+  EXPECT_TRUE(validName("_x"));
+  EXPECT_FALSE(validName("2speed"));
+  EXPECT_FALSE(validName("a-b"));
+  EXPECT_FALSE(validName(""));
+  EXPECT_TRUE(validName("abcdefghijklmnopqrstuvwxyz012345"));    // 32
+  EXPECT_FALSE(validName("abcdefghijklmnopqrstuvwxyz0123456"));  // 33
+  EXPECT_TRUE(shortText(nullptr));
+  EXPECT_TRUE(shortText(std::string(255, 'a').c_str()));
+  EXPECT_FALSE(shortText(std::string(256, 'a').c_str()));
+  constexpr auto l = declared("d", expose("level", level), expose("level", level));
+  EXPECT_FALSE(namesUnique(l.list));
+  constexpr auto m = declared("d", expose("level", level), event("press", press));
+  EXPECT_TRUE(namesUnique(m.list));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
