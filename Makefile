@@ -47,8 +47,10 @@ test-avr-core:
 	done
 	@echo "test-avr-core: $(words $(CORE_SOURCES)) files compile for atmega328p with -Wall -Wextra -Werror"
 
+# Every example for the AVR boards, then the benchmark sketches under extras/ for the Uno.
 test-examples:
 	bash tools/arduino/build-all.sh
+	bash tools/arduino/build-extras.sh
 
 # Every config.h setting at the ends of its range still builds without warnings from our code.
 test-config-limits:

@@ -19,13 +19,13 @@ size_of() {  # sketch dir -> "flash sram heap"
   if avr-nm "$elf" | grep -qw malloc; then heap=yes; else heap=no; fi
   echo "$((text + data)) $((data + bss)) $heap"
 }
-read -r bf bs _ < <(size_of bench/footprint/SerialEcho)
+read -r bf bs _ < <(size_of extras/bench/SerialEcho)
 {
   echo "# Footprint on the Uno (ATmega328P)"
   echo
   echo "Measured by \`bash bench/footprint.sh\` with $(avr-gcc --version | head -1), Arduino AVR core"
   echo "$(dpkg-query -W -f='${Version}' arduino-core-avr 2>/dev/null || echo '?'), on $(date -u +%Y-%m-%d)."
-  echo "flash = .text + .data, static SRAM = .data + .bss (avr-size -A). Baseline: bench/footprint/SerialEcho"
+  echo "flash = .text + .data, static SRAM = .data + .bss (avr-size -A). Baseline: extras/bench/SerialEcho"
   echo "(flash $bf B, SRAM $bs B). Default settings (src/hubwire/config.h)."
   echo
   echo "| sketch | flash | SRAM | flash over baseline | SRAM over baseline | target flash / SRAM | flash | SRAM | malloc linked |"

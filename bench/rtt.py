@@ -39,7 +39,8 @@ def rover_at(baud: int) -> str:
     if not os.path.exists(path) or open(path).read() != text:
         with open(path, "w") as f:
             f.write(text)
-    return build_sketch(d, os.path.join(OUT, f"RoverBaud{baud}"))
+    # Only the .ino is copied: its channels.h is found where it is.
+    return build_sketch(d, os.path.join(OUT, f"RoverBaud{baud}"), "-I" + os.path.join(ROOT, "examples/Rover"))
 
 
 def measure(link: str, n: int):

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Row 2: AVR cycles to receive a frame, from the stream read to the dispatched value (and the reply).
 
-Builds tools/bench-firmware/RxCycles for the Uno, runs it in `simuno --fast --cycles-log`, pairs the
+Builds extras/bench/RxCycles for the Uno, runs it in `simuno --fast --cycles-log`, pairs the
 GPIOR0 marks (k at the start of region k, k|0x80 at its end) and reports exact simavr cycle counts.
 Every region runs three times where it can: the counts must agree (the simulation is deterministic).
 
@@ -61,7 +61,8 @@ REGIONS = {
 
 
 def run() -> None:
-    elf = build_sketch(os.path.join(ROOT, "tools/bench-firmware/RxCycles"), os.path.join(OUT, "RxCycles"))
+    elf = build_sketch(os.path.join(ROOT, "extras/bench/RxCycles"), os.path.join(OUT, "RxCycles"),
+                       "-I" + os.path.join(ROOT, "examples/Rover"))  # Rover's channels.h
     log = os.path.join(OUT, "rx_cycles.log")
     if os.path.exists(log):
         os.remove(log)
@@ -140,7 +141,7 @@ def run() -> None:
     ])
     details = f"""### Row 2: AVR cycles to receive (simavr, exact)
 
-`tools/bench-firmware/RxCycles` (Rover's 12 channels, default config) feeds frames from RAM through a
+`extras/bench/RxCycles` (Rover's 12 channels, default config) feeds frames from RAM through a
 Stream into `hub.update()`; replies go to a Stream that only counts. Timer0's interrupt is off while
 measuring. Cycles are simavr's `avr->cycle` between two GPIOR0 writes, minus the {cal}-cycle cost of
 the marks. Repeated regions (3 runs, new seq each) gave counts {steady}. 16 MHz: 16 cycles = 1 us.

@@ -11,18 +11,11 @@
 
 Hubwire hub(Serial);
 
-uint16_t blinkMs = 500;         // the hub may set 50..5000 ms
-bool blinking = true;           // changed through the "led" control
-hubwire::Event<uint8_t> button; // carries how many presses so far
+// Its values and their declarations as channels, in a header of their own (the lower-bound
+// benchmarks in extras/bench/lowerbound build on the very same values).
+#include "channels.h"
 
 void setBlinking(bool on) { blinking = on; }
-
-// The device's name and its channels, worked out when the sketch compiles: names, units and the
-// descriptor the hub reads all live in flash, and a mistake here is a compile error.
-HUBWIRE_CHANNELS(channels, "minimal",
-  expose("blink_ms", blinkMs).writable().range(50, 5000).unit("ms"),
-  control("led", setBlinking),
-  event("button", button));
 
 void setup() {
   Serial.begin(115200);

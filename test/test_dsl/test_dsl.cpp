@@ -84,6 +84,16 @@ TEST(Dsl, ValuesThatDoNotFitAndRangesOutOfOrderAreMarked) {
   EXPECT_FALSE(expose("level", level).range(5, 1).rangeOrdered());
 }
 
+TEST(Dsl, WhetherAFunctionIsCalledIsKnownFromTheDeclaration) {
+  EXPECT_FALSE(expose("level", level).writable().hasCall());
+  EXPECT_TRUE(expose("level", level).writable().onChange(changed).hasCall());
+  EXPECT_TRUE(control("level", setLevel).hasCall());
+  EXPECT_TRUE(action("twice", twice).hasCall());
+  EXPECT_FALSE(event("alarm", alarm).hasCall());
+  // The marker stays out of the record the session reads.
+  EXPECT_EQ(expose("level", level).onChange(changed).info(nullptr, nullptr, nullptr, nullptr).flags, 0);
+}
+
 TEST(Dsl, DeviceNameAndTheList) {
   constexpr DeviceName dev = device("rover").firmware("1.0.0");
   EXPECT_STREQ(dev.name, "rover");

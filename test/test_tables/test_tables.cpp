@@ -18,16 +18,20 @@ struct Pos {
 uint16_t level;
 Event<uint8_t> press;
 void setLamp(bool) {}
+void changedLate();  // defined after the declarations, as when they sit in a header of their own
 
 }  // namespace
 
 HUBWIRE_CHANNELS(bench, device("bench").firmware("0.1"),
-  expose("level", level).writable().range(1, 9).failsafe(1),
+  expose("level", level).writable().range(1, 9).failsafe(1).onChange(changedLate),
   expose("pos", pos, "x:f32,ok:u8"),
   control("lamp", setLamp),
   event("press", press));
 
 namespace {
+
+int lateCalls;
+void changedLate() { ++lateCalls; }
 
 std::string text(const ChannelTable& t) { return std::string(t.json, t.jsonLength); }
 
@@ -50,7 +54,9 @@ TEST(Tables, OneRecordPerChannelWithItsFlashCopies) {
   ASSERT_NE(lv.limits, nullptr);
   EXPECT_EQ(lv.limits->min.bits & 0xFFFF, 1u);
   EXPECT_EQ(lv.limits->failsafe.bits & 0xFFFF, 1u);
-  EXPECT_EQ(lv.call, nullptr);  // no onChange
+  ASSERT_NE(lv.call, nullptr);  // onChange, though declared before it was defined
+  (*(void (*const*)())lv.call)();
+  EXPECT_EQ(lateCalls, 1);
   const ChannelInfo& ps = bench.channels[1];
   EXPECT_EQ(ps.type.code, kStruct);
   EXPECT_EQ(ps.limits, nullptr);  // none declared: none in flash

@@ -42,6 +42,10 @@ enum Kind : uint8_t { kVariable, kControl, kAction, kEvent };
 // Set while declaring when a range or failsafe value changes on its way into the channel's type
 // (300 for a uint8_t, -1.5 for an int16_t); Checked<> turns it into a compile error.
 const uint8_t kLossyValue = 0x80;
+// Set by onChange(): whether a function is called is known from the declaration alone, so the
+// function may be declared before HUBWIRE_CHANNELS and defined after it (GCC 5 cannot compare the
+// address of a function not yet defined with nullptr while compiling).
+const uint8_t kOnChangeGiven = 0x40;
 
 template <typename T>
 struct IsFloat {
@@ -139,7 +143,7 @@ class Decl {
   ///   expose("led", led).writable().onChange(ledChanged)
   constexpr Decl onChange(void (*fn)()) const {
     static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
-    return Decl(*this, unit_, description_, access_, flags_, lo_, hi_, failsafe_, fn);
+    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kOnChangeGiven), lo_, hi_, failsafe_, fn);
   }
 
   // Everything below is for HUBWIRE_CHANNELS.
@@ -177,7 +181,7 @@ class Decl {
   // control or action calls or a variable's onChange, the range and failsafe values.
   constexpr ChannelInfo info(const char* layout, StructCodec structs, const void* call, const ChannelLimits* limits) const {
     return ChannelInfo{ValueType{code_, count_, Text(layout, true), structs}, ret_, data_, call, thunk_, limits,
-                       access_, flags_};
+                       access_, (uint8_t)(flags_ & (kHasRange | kHasFailsafe))};
   }
   constexpr ChannelLimits limits() const {
     return ChannelLimits{Limits<T>::inRange(flags_), Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_)};
@@ -190,6 +194,8 @@ class Decl {
   constexpr const char* layout() const { return layout_; }
   constexpr const char* name() const { return name_; }
   constexpr Call call() const { return call_; }
+  // Does the session call a function for this channel: a control's or action's, or onChange()'s?
+  constexpr bool hasCall() const { return K == kControl || K == kAction || (flags_ & kOnChangeGiven); }
   constexpr uint16_t memSize() const { return memSize_; }
 
  private:

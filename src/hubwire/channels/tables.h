@@ -222,7 +222,7 @@ struct StructOf<D, Decls, I, true> {
   static constexpr const char* layout() { return LayoutFlash<D, Decls, I>::value.c; }
   static constexpr StructCodec codec() { return &structCodec; }
 };
-template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.call() != nullptr>
+template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.hasCall()>
 struct CallOf {
   static constexpr const void* get() { return nullptr; }
 };

@@ -6,7 +6,7 @@
 //   GPIOR0 = k (start of region k)  ...  GPIOR0 = k | 0x80 (end of region k)
 // and `simuno --fast --cycles-log FILE` logs "value cycle" for each write (avr->cycle, exact).
 // Timer0's interrupt is off while measuring: millis() stands still, no ISR lands in a region.
-// The channels are examples/Rover's twelve, in the same order: the same ids, records and descriptor.
+// The channels are examples/Rover's twelve, from its channels.h: the same ids, records and descriptor.
 // At the end the sketch times Serial at two baud rates (does simavr model UART timing?) and stops
 // the MCU (simuno exits 0). Region ids: see bench/rx_cycles.py (REGIONS).
 #include <Hubwire.h>
@@ -46,38 +46,13 @@ class FeedStream : public Stream {
 FeedStream feed;
 Hubwire hub(feed);
 
-// ---- examples/Rover's channels ---------------------------------------------------------------
-float left, right;
-struct Imu {
-  float ax, ay, az;
-  int16_t gyro[3];
-} imu;
-uint16_t rangeCm[4];
-uint16_t batteryMv = 7400;
-bool led;
-char name[17] = "rover";
-hubwire::Event<bool> bumper;
-uint16_t failsafes;
-uint32_t applied;
+// ---- examples/Rover's channels: its own header (the build passes -I examples/Rover) ------------
+#include "channels.h"
 
 void countWrite() { ++applied; }
 void ledChanged() { ++applied; }
 bool beep(uint16_t ms) { return ms <= 2000; }
 uint8_t selftest(uint8_t count) { return count; }
-
-HUBWIRE_CHANNELS(channels, device("rover").firmware("1.0.0"),
-  expose("left", left).writable().streamable().range(-1.0f, 1.0f).unit("m/s").failsafe(0.0f).onChange(countWrite),
-  expose("right", right).writable().streamable().range(-1.0f, 1.0f).unit("m/s").failsafe(0.0f).onChange(countWrite),
-  expose("imu", imu, "ax:f32,ay:f32,az:f32,gyro:i16[3]").streamable().describe("accel m/s2, gyro deg/s"),
-  expose("range", rangeCm).streamable().unit("cm"),
-  expose("battery", batteryMv).streamable().unit("mV"),
-  expose("led", led).writable().onChange(ledChanged),
-  expose("name", name).writable().onChange(countWrite),
-  event("bumper", bumper),
-  action("beep", beep).describe("beep for ms (max 2000)"),
-  action("selftest", selftest).describe("emit n bumper events"),
-  expose("failsafes", failsafes),
-  expose("applied", applied));
 
 // ---- helpers ------------------------------------------------------------------------------------
 #define BARRIER() asm volatile("" ::: "memory")

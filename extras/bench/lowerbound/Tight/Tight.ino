@@ -1,13 +1,15 @@
 // Tight: examples/Minimal with a size-first device implementation (tight.h/.cpp) instead of
-// Hubwire.h. The descriptor and channel table below, written by hand, are what HUBWIRE_CHANNELS
-// builds from Minimal's declarations:
+// Hubwire's session. The descriptor and channel table below, written by hand, are what
+// HUBWIRE_CHANNELS builds from Minimal's declarations (checked: same length and hash):
 //   expose("blink_ms", blinkMs).writable().range(50, 5000).unit("ms"),
 //   control("led", setBlinking),
 //   event("button", button)
 #include "tight.h"
 
-uint16_t blinkMs = 500;  // the hub may set 50..5000 ms
-bool blinking = true;    // changed through the "led" control
+// Minimal's values, and its declarations that the descriptor below is checked against, from
+// examples/Minimal/channels.h (the build passes -I examples/Minimal). Nothing of the library is
+// linked: the declarations' tables are never referenced, so they are left out.
+#include "channels.h"
 
 void setBlinking(bool on) { blinking = on; }
 
@@ -24,6 +26,11 @@ void setBlinking(bool on) { blinking = on; }
   "{\"p\":1,\"n\":\"minimal\",\"ch\":[{\"id\":1,\"n\":\"blink_ms\",\"a\":\"" TW_BLINK_ACCESS      \
   "\",\"t\":\"u16\",\"u\":\"ms\",\"min\":50,\"max\":5000},{\"id\":2,\"n\":\"led\",\"a\":\"w\","    \
   "\"t\":\"bool\"},{\"id\":3,\"n\":\"button\",\"a\":\"e\",\"t\":\"u8\"}]}"
+
+#ifndef TIGHT_STREAMABLE
+static_assert(sizeof(TW_JSON) - 1 == channels.jsonLength && twFnv(TW_JSON, sizeof(TW_JSON) - 1) == channels.hash,
+              "the descriptor written here is not the one examples/Minimal's declarations make");
+#endif
 
 const char twDescriptor[] PROGMEM = TW_JSON;
 const uint16_t twDescLength = sizeof(TW_JSON) - 1;
