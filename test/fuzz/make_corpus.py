@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Seed corpora for the fuzz harnesses, extracted from the golden vectors (test/vectors/*.json).
 
-    python3 test/fuzz/make_corpus.py OUT_DIR     -> OUT_DIR/frame/*, OUT_DIR/device/*
+    python3 test/fuzz/make_corpus.py OUT_DIR     -> OUT_DIR/frame/*, OUT_DIR/session/*
 
 frame:  [accepted payload byte] + wire bytes, for every frames.json wire, streams.json input and
         cobs.json encoding (with a delimiter), at the vector's max_payload and at 32 and 255.
-device: raw mode ([0x00|room] + a hub hello wire + one hub->device frame wire), the same in
+session: raw mode ([0x00|room] + a hub hello wire + one hub->device frame wire), the same in
         structured mode (records built from the vector's type/seq/id/payload), and one seed with every
         hub->device frame in a row in each mode.
 """
@@ -32,7 +32,7 @@ def main(out):
     frames = load("frames.json")
     streams = load("streams.json")
     cobs = load("cobs.json")
-    seeds = {"frame": [], "device": []}
+    seeds = {"frame": [], "session": []}
     for v in frames:
         w = bytes.fromhex(v["wire"])
         for mp in (32, 255):
@@ -51,13 +51,13 @@ def main(out):
     room = 0x80  # mode byte: room 64 * 4 bytes
     all_raw = bytes((room,)) + b"".join(bytes.fromhex(v["wire"]) for v in [hub_hello] + to_device)
     all_rec = bytes((room | 1,)) + b"".join(record(v) for v in [hub_hello] + to_device)
-    seeds["device"] += [all_raw, all_rec]
+    seeds["session"] += [all_raw, all_rec]
     for v in to_device:
-        seeds["device"].append(bytes((room,)) + bytes.fromhex(hub_hello["wire"]) + bytes.fromhex(v["wire"]))
-        seeds["device"].append(bytes((room | 1,)) + record(hub_hello) + record(v) + bytes((0xFF, 1, 3, 0, 0))
+        seeds["session"].append(bytes((room,)) + bytes.fromhex(hub_hello["wire"]) + bytes.fromhex(v["wire"]))
+        seeds["session"].append(bytes((room | 1,)) + record(hub_hello) + record(v) + bytes((0xFF, 1, 3, 0, 0))
                                + record(v, dt=30))
     for v in streams:  # line noise then a hello
-        seeds["device"].append(bytes((room,)) + bytes.fromhex(v["input"]) + bytes.fromhex(hub_hello["wire"]))
+        seeds["session"].append(bytes((room,)) + bytes.fromhex(v["input"]) + bytes.fromhex(hub_hello["wire"]))
     for target, items in seeds.items():
         d = os.path.join(out, target)
         os.makedirs(d, exist_ok=True)

@@ -26,7 +26,7 @@ case "${1:-}" in
   *) echo "usage: $0 [--long [SECONDS] | --build | --repro FILE]" >&2; exit 2 ;;
 esac
 
-HARNESSES=(frame device)
+HARNESSES=(frame session)
 CORE=("$ROOT"/src/hubwire/wire/*.cpp "$ROOT"/src/hubwire/session/*.cpp)
 FLAGS=(-std=c++11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
        -fno-omit-frame-pointer -Wall -Wextra -I"$ROOT/src")

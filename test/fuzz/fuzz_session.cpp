@@ -1,4 +1,4 @@
-// libFuzzer harness: the device session dispatcher (src/hubwire/session/device.*) fed arbitrary
+// libFuzzer harness: the device session dispatcher (src/hubwire/session/session.*) fed arbitrary
 // bytes through a fake stream, with a fake clock that the input advances.
 //
 // The Session declares channels of every kind: each scalar type (bool .. f64), a fixed array, a
@@ -31,7 +31,7 @@ using namespace hubwire;
 #define CHECK(c)                                                          \
   do {                                                                    \
     if (!(c)) {                                                           \
-      fprintf(stderr, "fuzz_device: check failed: %s (line %d)\n", #c, __LINE__); \
+      fprintf(stderr, "fuzz_session: check failed: %s (line %d)\n", #c, __LINE__); \
       abort();                                                            \
     }                                                                     \
   } while (0)
