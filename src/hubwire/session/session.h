@@ -14,10 +14,10 @@
 #include "../config.h"
 #include "../port.h"
 #include "../text.h"
-#include "../wire/frame.h"
-#include "../wire/values.h"
 #include "../channels/channel.h"
+#include "../wire/frame.h"
 #include "../wire/messages.h"
+#include "../wire/values.h"
 #include "event_queue.h"
 #include "streams.h"
 
