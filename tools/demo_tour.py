@@ -16,7 +16,7 @@ from typing import Any, Callable, List
 
 import hubwire
 
-STEP_PAUSE = 0.6  # seconds between steps, so a person can follow
+PAUSE = [0.6]  # seconds between steps, so a person can follow (--pause)
 
 
 def show(code: str, result: Any = "") -> None:
@@ -26,7 +26,7 @@ def show(code: str, result: Any = "") -> None:
 
 def title(text: str) -> None:
     print(f"\n== {text}", flush=True)
-    time.sleep(STEP_PAUSE)
+    time.sleep(PAUSE[0])
 
 
 def settled(read: Callable[[], Any], ok: Callable[[Any], bool], seconds: float = 3.0) -> Any:
@@ -111,7 +111,9 @@ def tour(rover: hubwire.Device, check: Callable[[bool, str], None]) -> None:
 def main(argv: Any = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("port", help="serial port or pyserial URL of a board running examples/Rover")
+    p.add_argument("--pause", type=float, default=PAUSE[0], help="seconds between steps (default %(default)s)")
     args = p.parse_args(argv)
+    PAUSE[0] = args.pause
     failures: List[str] = []
 
     def check(ok: bool, why: str) -> None:
