@@ -69,7 +69,7 @@ test-manifests:
 test-python: emulator simuno uno-firmware
 	$(PY) -m pytest host/tests -q
 
-demo: setup emulator simuno uno-firmware
+demo: setup simuno uno-firmware
 	bash tools/demo.sh
 
 # Every benchmark row (footprint, AVR cycles, wire bytes, hub throughput, connect time, round

@@ -2,14 +2,19 @@
 # `make demo`: the hub discovering a simulated Arduino Uno that runs examples/Rover.
 #
 # Starts build/simuno/simuno (real AVR firmware in simavr, its UART on a pty that resets the board
-# when opened, with a bootloader delay like a real Uno) and runs `hubwire info` and `hubwire watch`
-# on it. Runs until Ctrl-C on a terminal; about 15 s when stdin or stdout is not a terminal.
-# Always stops the simulator and removes the link. Needs `make simuno uno-firmware` (and `make setup`
+# when opened, with a bootloader delay like a real Uno), walks through every kind of message with
+# tools/demo_tour.py (reads, acked writes, a stream following the motors, a refused value, an
+# action, events once each, link health), then runs `hubwire watch`. Watch runs until Ctrl-C on a
+# terminal; about 15 s when stdin or stdout is not a terminal. Always stops the simulator and
+# removes the link; Ctrl-C is a normal way to end (exit status 0). Needs `make simuno uno-firmware` (and `make setup`
 # for the venv) first; `make demo` does all of it.
 #
 # Environment: HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
 # default), DEMO_BOOT_DELAY_MS (default 1000).
 set -euo pipefail
+# Job control: each command runs in its own process group and owns the terminal while it runs, so
+# Ctrl-C reaches only the hub command (which ends cleanly), not make or this script.
+set -m
 cd "$(dirname "$0")/.."
 
 SIMUNO=build/simuno/simuno
@@ -43,7 +48,7 @@ cleanup() {
   rm -rf "$tmp"
 }
 trap cleanup EXIT
-trap 'exit 130' INT
+trap 'exit 0' INT
 trap 'exit 143' TERM HUP
 
 # the simulated Uno; its chatter goes to a log (shown if something fails)
@@ -81,7 +86,7 @@ cat <<EOF
           Opening the port resets the board and its bootloader holds it for
           ${BOOT_DELAY_MS} ms, like a real Uno; the hub rides through that by itself.
 
- First the channels the hub discovered from the board's descriptor, then
+ First a tour of every kind of message (tools/demo_tour.py), then
  \`hubwire watch\` with live values, events and link health, $how_long.
 
  With a real board: upload examples/Rover to an Uno (Arduino IDE or arduino-cli),
@@ -95,8 +100,8 @@ cat <<EOF
 EOF
 
 status=0
-echo "\$ hubwire info $link"
-"$PY" -m hubwire info "$link" || status=$?
+echo "\$ python tools/demo_tour.py $link"
+"$PY" tools/demo_tour.py "$link" || status=$?
 if [ "$status" -eq 0 ]; then
   echo
   echo "\$ hubwire watch $link ${duration_args[*]}"

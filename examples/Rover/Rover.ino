@@ -58,8 +58,13 @@ void readSensors() {
   imu.ay = turn * 0.2f;
   imu.az = 9.81f;
   imu.gyro[2] = (int16_t)(turn * 90);
-  for (uint8_t i = 0; i < 4; ++i) rangeCm[i] = (uint16_t)(100 + 50 * i + (at / 100 + i * 7) % 20);
-  batteryMv = (uint16_t)(7400 - (at / 1000) % 200);
+  // Obstacles come nearer ahead while it drives forward, and on the side it turns towards.
+  int16_t ahead = (int16_t)(drive * 100), side = (int16_t)(turn * 50);
+  rangeCm[0] = (uint16_t)(150 - ahead);
+  rangeCm[1] = (uint16_t)(150 - side);
+  rangeCm[2] = (uint16_t)(150 + ahead);
+  rangeCm[3] = (uint16_t)(150 + side);
+  batteryMv = (uint16_t)(7400 - (fabs(left) + fabs(right)) * 150);  // sags under load
 }
 
 void setup() {
