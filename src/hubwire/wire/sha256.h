@@ -136,7 +136,9 @@ constexpr Words compress(const Words& h, size_t block) {
   return add(h, blockRounds<Msg>(h, block * 64));
 }
 
-// The state after the first K blocks: each a constant of its own, evaluated once.
+// The state after the first K blocks: each a constant of its own, evaluated once. Defined below as
+// well, for a digest() called where no constant is required (at -O0 clang then reads the last state
+// from memory; the rounds still never run on the target).
 template <typename Msg, size_t K>
 struct State {
   static constexpr Words value = compress<Msg>(State<Msg, K - 1>::value, K - 1);
@@ -145,6 +147,10 @@ template <typename Msg>
 struct State<Msg, 0> {
   static constexpr Words value = initial();
 };
+template <typename Msg, size_t K>
+constexpr Words State<Msg, K>::value;
+template <typename Msg>
+constexpr Words State<Msg, 0>::value;
 
 // 0, 1, ..., N-1 (N at most 32: a linear build is shallow enough).
 template <size_t... I>
