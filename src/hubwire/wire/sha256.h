@@ -1,0 +1,183 @@
+// SHA-256 (FIPS 180-4) worked out by the compiler (C++11 constexpr): the digest of a text known
+// while compiling, such as the descriptor JSON. Nothing here runs on the board: only the digest
+// bytes a program stores (e.g. a Digest<16> in flash) take any room.
+//
+//   struct Msg {  // the message: its length and its bytes, both constexpr
+//     static constexpr size_t length() { return 3; }
+//     static constexpr char at(size_t i) { return "abc"[i]; }
+//   };
+//   const hubwire::sha256::Digest<16> id HUBWIRE_FLASH = hubwire::sha256::digest<Msg, 16>();
+//
+// digest<Msg, N>() is the first N bytes of SHA-256 (N = 32: all of it). The compiler's limits are
+// far away for messages of up to 16 KiB (the largest descriptor): the state after each 64-byte block
+// is a constant of its own (State<Msg, k>::value), so no single constant evaluation covers more than
+// one block (64 rounds deep), and the chain of blocks is one template instantiation a block (257 for
+// 16 KiB, under the 900 of GCC and the 1024 of clang: GCC 5.4 stops at about 56 KB). What it costs
+// the compiler: bench/sha256-compile.sh (avr-g++ 5.4 keeps about 1 MB a block until the end).
+#ifndef HUBWIRE_WIRE_SHA256_H
+#define HUBWIRE_WIRE_SHA256_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+namespace hubwire {
+namespace sha256 {
+
+// The first N bytes of a digest (big-endian words, as SHA-256 prints).
+template <size_t N>
+struct Digest {
+  uint8_t bytes[N];
+};
+
+// Two messages one after the other (e.g. the parts of the descriptor): a message itself.
+template <typename A, typename B>
+struct Concat {
+  static constexpr size_t length() { return A::length() + B::length(); }
+  static constexpr char at(size_t i) { return i < A::length() ? A::at(i) : B::at(i - A::length()); }
+};
+
+namespace detail {
+
+// Words are spelt uint32_t and constants UL throughout: on AVR an int has 16 bits.
+struct Words {
+  uint32_t h[8];
+};
+
+// The round constants, as a chain of conditionals: GCC 5 copied a constexpr array whole at every
+// read of one element (2 KB a round).
+constexpr uint32_t roundConstant(unsigned t) {
+  return t == 0 ? 0x428a2f98UL : t == 1 ? 0x71374491UL : t == 2 ? 0xb5c0fbcfUL : t == 3 ? 0xe9b5dba5UL :
+         t == 4 ? 0x3956c25bUL : t == 5 ? 0x59f111f1UL : t == 6 ? 0x923f82a4UL : t == 7 ? 0xab1c5ed5UL :
+         t == 8 ? 0xd807aa98UL : t == 9 ? 0x12835b01UL : t == 10 ? 0x243185beUL : t == 11 ? 0x550c7dc3UL :
+         t == 12 ? 0x72be5d74UL : t == 13 ? 0x80deb1feUL : t == 14 ? 0x9bdc06a7UL : t == 15 ? 0xc19bf174UL :
+         t == 16 ? 0xe49b69c1UL : t == 17 ? 0xefbe4786UL : t == 18 ? 0x0fc19dc6UL : t == 19 ? 0x240ca1ccUL :
+         t == 20 ? 0x2de92c6fUL : t == 21 ? 0x4a7484aaUL : t == 22 ? 0x5cb0a9dcUL : t == 23 ? 0x76f988daUL :
+         t == 24 ? 0x983e5152UL : t == 25 ? 0xa831c66dUL : t == 26 ? 0xb00327c8UL : t == 27 ? 0xbf597fc7UL :
+         t == 28 ? 0xc6e00bf3UL : t == 29 ? 0xd5a79147UL : t == 30 ? 0x06ca6351UL : t == 31 ? 0x14292967UL :
+         t == 32 ? 0x27b70a85UL : t == 33 ? 0x2e1b2138UL : t == 34 ? 0x4d2c6dfcUL : t == 35 ? 0x53380d13UL :
+         t == 36 ? 0x650a7354UL : t == 37 ? 0x766a0abbUL : t == 38 ? 0x81c2c92eUL : t == 39 ? 0x92722c85UL :
+         t == 40 ? 0xa2bfe8a1UL : t == 41 ? 0xa81a664bUL : t == 42 ? 0xc24b8b70UL : t == 43 ? 0xc76c51a3UL :
+         t == 44 ? 0xd192e819UL : t == 45 ? 0xd6990624UL : t == 46 ? 0xf40e3585UL : t == 47 ? 0x106aa070UL :
+         t == 48 ? 0x19a4c116UL : t == 49 ? 0x1e376c08UL : t == 50 ? 0x2748774cUL : t == 51 ? 0x34b0bcb5UL :
+         t == 52 ? 0x391c0cb3UL : t == 53 ? 0x4ed8aa4aUL : t == 54 ? 0x5b9cca4fUL : t == 55 ? 0x682e6ff3UL :
+         t == 56 ? 0x748f82eeUL : t == 57 ? 0x78a5636fUL : t == 58 ? 0x84c87814UL : t == 59 ? 0x8cc70208UL :
+         t == 60 ? 0x90befffaUL : t == 61 ? 0xa4506cebUL : t == 62 ? 0xbef9a3f7UL : 0xc67178f2UL;
+}
+constexpr Words initial() {
+  return Words{{0x6a09e667UL, 0xbb67ae85UL, 0x3c6ef372UL, 0xa54ff53aUL, 0x510e527fUL, 0x9b05688cUL, 0x1f83d9abUL,
+                0x5be0cd19UL}};
+}
+
+// Rotations spelt out, not calls of a rotate function: every constexpr call costs GCC 5 memory that
+// it keeps until the end of the file.
+constexpr uint32_t bigSigma0(uint32_t x) { return (x >> 2 | x << 30) ^ (x >> 13 | x << 19) ^ (x >> 22 | x << 10); }
+constexpr uint32_t bigSigma1(uint32_t x) { return (x >> 6 | x << 26) ^ (x >> 11 | x << 21) ^ (x >> 25 | x << 7); }
+constexpr uint32_t smallSigma0(uint32_t x) { return (x >> 7 | x << 25) ^ (x >> 18 | x << 14) ^ x >> 3; }
+constexpr uint32_t smallSigma1(uint32_t x) { return (x >> 17 | x << 15) ^ (x >> 19 | x << 13) ^ x >> 10; }
+
+// ---- padding: the message, 0x80, zeros, then its length in bits (64-bit big-endian) ----
+// size_t has 16 bits on AVR: the bit count is worked out in 64 bits.
+constexpr size_t blockCount(size_t length) { return (length + 8) / 64 + 1; }
+constexpr uint8_t lengthByte(size_t length, size_t fromEnd) {
+  return (uint8_t)(((uint64_t)length * 8) >> (8 * fromEnd));
+}
+template <typename Msg>
+constexpr uint8_t paddedByte(size_t i) {
+  return i < Msg::length()    ? (uint8_t)Msg::at(i)
+         : i == Msg::length() ? (uint8_t)0x80
+         : i + 8 < blockCount(Msg::length()) * 64
+             ? (uint8_t)0
+             : lengthByte(Msg::length(), blockCount(Msg::length()) * 64 - 1 - i);
+}
+template <typename Msg>
+constexpr uint32_t messageWord(size_t i) {
+  return (uint32_t)(uint8_t)Msg::at(i) << 24 | (uint32_t)(uint8_t)Msg::at(i + 1) << 16 |
+         (uint32_t)(uint8_t)Msg::at(i + 2) << 8 | (uint8_t)Msg::at(i + 3);
+}
+template <typename Msg>
+constexpr uint32_t paddedWord(size_t i) {
+  return i + 4 <= Msg::length() ? messageWord<Msg>(i)
+       : (uint32_t)paddedByte<Msg>(i) << 24 | (uint32_t)paddedByte<Msg>(i + 1) << 16 |
+         (uint32_t)paddedByte<Msg>(i + 2) << 8 | (uint32_t)paddedByte<Msg>(i + 3);
+}
+
+// ---- one block: 64 rounds, one call each (64 deep). The working variables a..h and the schedule's
+// window W[t..t+15] are 24 word parameters, not an aggregate, and T1 is written out twice rather
+// than passed through a call of its own: GCC 5 keeps every constexpr call's arguments until the end
+// of the file, so fewer and smaller calls are what keeps its memory down (2 MB a block at first,
+// 1 MB now). W[t+16] is made while round t runs. ----
+constexpr Words rounds(unsigned t, uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f,
+                       uint32_t g, uint32_t h, uint32_t w0, uint32_t w1, uint32_t w2, uint32_t w3, uint32_t w4,
+                       uint32_t w5, uint32_t w6, uint32_t w7, uint32_t w8, uint32_t w9, uint32_t w10, uint32_t w11,
+                       uint32_t w12, uint32_t w13, uint32_t w14, uint32_t w15) {
+  return t == 64 ? Words{{a, b, c, d, e, f, g, h}}
+                 : rounds(t + 1,
+                          h + bigSigma1(e) + ((e & f) ^ (~e & g)) + roundConstant(t) + w0 +  // T1
+                              bigSigma0(a) + ((a & b) ^ (a & c) ^ (b & c)),                 // + T2
+                          a, b, c,
+                          d + h + bigSigma1(e) + ((e & f) ^ (~e & g)) + roundConstant(t) + w0,  // d + T1
+                          e, f, g, w1, w2, w3, w4, w5, w6, w7, w8, w9, w10, w11, w12, w13, w14, w15,
+                          smallSigma1(w14) + w9 + smallSigma0(w1) + w0);
+}
+template <typename Msg>
+constexpr Words blockRounds(const Words& h, size_t at) {
+  return rounds(0, h.h[0], h.h[1], h.h[2], h.h[3], h.h[4], h.h[5], h.h[6], h.h[7], paddedWord<Msg>(at),
+                paddedWord<Msg>(at + 4), paddedWord<Msg>(at + 8), paddedWord<Msg>(at + 12), paddedWord<Msg>(at + 16),
+                paddedWord<Msg>(at + 20), paddedWord<Msg>(at + 24), paddedWord<Msg>(at + 28), paddedWord<Msg>(at + 32),
+                paddedWord<Msg>(at + 36), paddedWord<Msg>(at + 40), paddedWord<Msg>(at + 44), paddedWord<Msg>(at + 48),
+                paddedWord<Msg>(at + 52), paddedWord<Msg>(at + 56), paddedWord<Msg>(at + 60));
+}
+constexpr Words add(const Words& h, const Words& v) {
+  return Words{{h.h[0] + v.h[0], h.h[1] + v.h[1], h.h[2] + v.h[2], h.h[3] + v.h[3], h.h[4] + v.h[4],
+                h.h[5] + v.h[5], h.h[6] + v.h[6], h.h[7] + v.h[7]}};
+}
+template <typename Msg>
+constexpr Words compress(const Words& h, size_t block) {
+  return add(h, blockRounds<Msg>(h, block * 64));
+}
+
+// The state after the first K blocks: each a constant of its own, evaluated once. Defined below as
+// well, for a digest() called where no constant is required (at -O0 clang then reads the last state
+// from memory; the rounds still never run on the target).
+template <typename Msg, size_t K>
+struct State {
+  static constexpr Words value = compress<Msg>(State<Msg, K - 1>::value, K - 1);
+};
+template <typename Msg>
+struct State<Msg, 0> {
+  static constexpr Words value = initial();
+};
+template <typename Msg, size_t K>
+constexpr Words State<Msg, K>::value;
+template <typename Msg>
+constexpr Words State<Msg, 0>::value;
+
+// 0, 1, ..., N-1 (N at most 32: a linear build is shallow enough).
+template <size_t... I>
+struct Indices {};
+template <size_t N, size_t... I>
+struct MakeIndices : MakeIndices<N - 1, N - 1, I...> {};
+template <size_t... I>
+struct MakeIndices<0, I...> {
+  typedef Indices<I...> type;
+};
+
+template <size_t... I>
+constexpr Digest<sizeof...(I)> bytesOf(const Words& h, Indices<I...>) {
+  return Digest<sizeof...(I)>{{(uint8_t)(h.h[I / 4] >> (24 - 8 * (I % 4)))...}};
+}
+
+}  // namespace detail
+
+// The first N bytes of SHA-256 of Msg (a type with static constexpr length() and at(i)).
+template <typename Msg, size_t N = 32>
+constexpr Digest<N> digest() {
+  static_assert(N >= 1 && N <= 32, "a SHA-256 digest has 1..32 bytes");
+  return detail::bytesOf(detail::State<Msg, detail::blockCount(Msg::length())>::value,
+                         typename detail::MakeIndices<N>::type());
+}
+
+}  // namespace sha256
+}  // namespace hubwire
+
+#endif
