@@ -18,10 +18,13 @@ __all__ = [
     "max_encoded_length",
     "PROTOCOL_MAX_PAYLOAD",
     "HEADER_CRC_SIZE",
+    "NOISE_SAMPLE_SIZE",
 ]
 
 PROTOCOL_MAX_PAYLOAD = 255
 HEADER_CRC_SIZE = 5
+#: bytes of the first discarded input a FrameDecoder keeps, to tell what a port said instead of frames
+NOISE_SAMPLE_SIZE = 64
 
 
 class Frame(NamedTuple):
@@ -100,10 +103,13 @@ class FrameDecoder:
 
     ``max_payload`` is the largest payload this receiver accepts (1..255); a frame whose raw length
     exceeds ``5 + max_payload`` is counted as ``overflow``.
+
+    The first :data:`NOISE_SAMPLE_SIZE` bytes it discards are kept in :attr:`sample` (with their
+    ``0x00`` delimiters), so that a port that sends something other than frames can be described.
     """
 
     __slots__ = ("max_payload", "crc", "overflow", "dropped", "frames", "_pending", "_raw_limit",
-                 "_fast_limit", "_spill", "_skipping")
+                 "_fast_limit", "_spill", "_skipping", "sample")
 
     def __init__(self, max_payload: int = PROTOCOL_MAX_PAYLOAD) -> None:
         if not 0 <= max_payload <= PROTOCOL_MAX_PAYLOAD:
@@ -125,6 +131,20 @@ class FrameDecoder:
         # pending bytes beyond this length are certainly an overflow
         self._spill = 2 * self._raw_limit + 4
         self._skipping = False
+        #: the first bytes discarded (at most NOISE_SAMPLE_SIZE); kept across reset()
+        self.sample = b""
+
+    def _keep(self, data: bytes) -> None:
+        # called for discarded bytes only, never on a valid frame's path
+        if len(self.sample) < NOISE_SAMPLE_SIZE:
+            self.sample = (self.sample + data)[:NOISE_SAMPLE_SIZE]
+
+    def noise(self) -> bytes:
+        """:attr:`sample`, then the start of the bytes still waiting for a delimiter (bounded).
+
+        Text without ``0x00`` is never discarded, only held back: this shows it as well.
+        """
+        return (self.sample + self._pending)[:NOISE_SAMPLE_SIZE]
 
     def counters(self) -> dict:
         """The three drop counters as a dict ``{"crc", "overflow", "dropped"}``."""
@@ -147,6 +167,7 @@ class FrameDecoder:
                 # the first part continues a frame already known to overflow
                 self._skipping = False
                 self.overflow += 1
+                self._keep(parts[0] + b"\x00")
                 del parts[0]
             fast = self._fast_limit
             limit = self._raw_limit
@@ -160,23 +181,26 @@ class FrameDecoder:
                     continue  # an empty frame (00 00) is ignored, not counted: a sender's flush
                 if len(enc) > fast and decoded_length(enc) > limit:
                     self.overflow += 1
+                    self._keep(enc + b"\x00")
                     continue
                 try:
                     raw = decode(enc)
                 except _CobsError:
-                    self.dropped += 1
-                    continue
+                    raw = b""
                 if len(raw) < 5:
                     self.dropped += 1
+                    self._keep(enc + b"\x00")
                     continue
                 if crc(raw[:-2], 0xFFFF) != raw[-2] | (raw[-1] << 8):
                     self.crc += 1
+                    self._keep(enc + b"\x00")
                     continue
                 append(new(frame_cls, (raw[0], raw[1], raw[2], raw[3:-2])))
             self.frames += len(out)
         if len(tail) > self._spill and not self._skipping:
             # no delimiter for a long time: the frame is an overflow whatever follows; stop buffering
             self._skipping = True
+            self._keep(tail)
             tail = b""
         elif self._skipping:
             tail = b""
