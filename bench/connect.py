@@ -60,7 +60,7 @@ def connect_once(url: str, cache_dir: str):
     t = Timed(url, cache_dir)
     t0, t1 = t.open()
     hello = t.hellos[0][0] if t.hellos else t1
-    info = (t.s.stats["downloads"], t.s.stats["chunk_requests"], len(t.s.descriptor.raw), len(t.s.descriptor.channels))
+    info = (t.s.stats.downloads, t.s.stats.chunk_requests, len(t.s.descriptor.raw), len(t.s.descriptor.channels))
     return t, (t1 - t0) * 1e3, (hello - t0) * 1e3, (t1 - hello) * 1e3, info
 
 

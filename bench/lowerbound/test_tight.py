@@ -243,7 +243,7 @@ def test_event_retried_with_same_seq_until_acked(tight):
     sim.press()
     evframes = [f for f in got if f.type == m.EVENT]
     assert len(evframes) == 3 and len({f.seq for f in evframes}) == 1
-    assert s.stats["duplicate_events"] == 2
+    assert s.stats.duplicate_events == 2
     assert len(dropped) == 2
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import select
 import subprocess
-import sys
 import threading
 import time
 import tty
@@ -14,17 +13,11 @@ from typing import Any, Callable, Dict, Iterator, List, Optional
 import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-TOOLS = os.path.join(REPO, "tools")
-if TOOLS not in sys.path:
-    sys.path.insert(0, TOOLS)
 
-from faultlink import FaultLink, Faults, stop_process  # noqa: E402
-from hubwire.wire import messages as m  # noqa: E402
-from hubwire.wire.frame import FrameDecoder, encode_frame  # noqa: E402
-
-
-def emulator_binary() -> str:
-    return os.environ.get("HUBWIRE_EMULATOR") or os.path.join(REPO, "build", "emulator", "hubwire-emulator")
+from hubwire.testing import emulator_binary
+from hubwire.testing.faultlink import FaultLink, Faults, FaultyTransport, stop_process
+from hubwire.wire import messages as m
+from hubwire.wire.frame import FrameDecoder, encode_frame
 
 
 class Emu:

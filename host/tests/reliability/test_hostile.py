@@ -20,6 +20,7 @@ import hubwire
 from hubwire import parse_descriptor
 from hubwire.descriptor import MAX_DEPTH, MAX_DESCRIPTOR_SIZE
 from hubwire.errors import DescriptorError, InvalidValue
+from hubwire.testing import tap_of, tapped
 from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
 from hubwire.wire.messages import NakCode
@@ -212,7 +213,7 @@ def test_impossible_frames_are_dropped_and_counted_and_the_link_survives() -> No
             assert dev.x == 7
             c = dev.health().hub_counters
             assert c["overflow"] >= 1 and c["crc"] >= 1 and c["dropped"] >= 5, c
-            assert dev.session.stats["unknown_frames"] >= 1
+            assert dev.session.stats.unknown_frames >= 1
             assert dev.state == "ready"
             dev.x = 5
 
@@ -310,9 +311,9 @@ OUT_OF_RANGE = [
 
 
 def test_values_out_of_range_are_refused_before_sending(emu: Any) -> None:
-    with hubwire.connect(emu.link, cache_dir=False) as dev:
+    with hubwire.connect(transport=tapped(emu.link), cache_dir=False) as dev:
         sent: List[Any] = []
-        dev.session.tx_filter = lambda w: (sent.extend(f for f in FrameDecoder().feed(w) if f.type == m.CONTROL), True)[1]
+        tap_of(dev).tx_filter = lambda w: (sent.extend(f for f in FrameDecoder().feed(w) if f.type == m.CONTROL), True)[1]
         for name, value in OUT_OF_RANGE:
             with pytest.raises((InvalidValue, TypeError, ValueError)) as e:
                 dev.write(name, value)
@@ -323,7 +324,7 @@ def test_values_out_of_range_are_refused_before_sending(emu: Any) -> None:
         for arg in (256, -1):
             with pytest.raises((InvalidValue, TypeError, ValueError)):
                 dev.selftest(arg)
-        dev.session.tx_filter = None
+        tap_of(dev).tx_filter = None
         assert sent == [], f"sent {sent}"
         assert dev.applied == 0
 

@@ -10,6 +10,7 @@ import time
 import pytest
 
 from hubwire.errors import InvalidValue, NakError
+from hubwire.testing import tap_of
 from hubwire.wire.messages import NakCode
 
 from .conftest import REPO, Examples, drain_events, wait_until
@@ -85,11 +86,11 @@ def test_failsafe_stops_the_motor_when_the_hub_goes_silent(examples: Examples) -
         dev.speed = 150
     lost = threading.Event()
     dev.on("link_lost", lost.set)
-    dev.session.tx_paused = True  # the hub goes silent
+    tap_of(dev).paused = True  # the hub goes silent
     try:
         assert lost.wait(3.0), "the device never dropped the link"
     finally:
-        dev.session.tx_paused = False
+        tap_of(dev).paused = False
     wait_until(lambda: dev.state == "ready", 5.0, "the hub to re-link")
     assert dev.speed == 0 and dev.stops == 1
     dev.speed = -30  # the hub drives again

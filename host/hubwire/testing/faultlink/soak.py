@@ -1,7 +1,7 @@
 """Soak: the Rover emulator behind a faulty link, hammered with writes, reads and events.
 
-    PYTHONPATH=tools .venv/bin/python -m faultlink.soak --seconds 75          # the bounded CI run
-    PYTHONPATH=tools .venv/bin/python -m faultlink.soak --frames 1000000      # the long run
+    python -m hubwire.testing.faultlink.soak --seconds 75          # the bounded CI run
+    python -m hubwire.testing.faultlink.soak --frames 1000000      # the long run
 
 (``HUBWIRE_SOAK_FRAMES`` / ``HUBWIRE_SOAK_SECONDS`` set the same from the environment, which is how
 ``host/tests/reliability/test_soak.py`` is switched to the long mode.)
@@ -30,16 +30,12 @@ import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
+from .. import emulator_binary
 from . import FaultLink, Faults, stop_process
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 #: the issue's link: BER 1e-4, 1% byte drops, 0.5% duplicated frames, a garbage burst (8..64 random bytes) every 1 s
 SOAK_FAULTS = Faults(ber=1e-4, drop=0.01, dup=0.005, garbage_every=1.0, garbage_len=(8, 64))
-
-
-def emulator_binary() -> str:
-    return os.environ.get("HUBWIRE_EMULATOR") or os.path.join(REPO, "build", "emulator", "hubwire-emulator")
 
 
 def value_for(k: int) -> float:
@@ -253,9 +249,9 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
             "event_order_ok": st_timeouts > 0 or [v for _, v in evs] == expected_values,
             "samples": dict(samples), "bad_samples": len(bad_samples), "bad_sample_values": bad_samples[:10],
             "failsafes": failsafes, "link_lost_callbacks": len(lost),
-            "reboots": s.stats["reboots"], "state": dev.state,
+            "reboots": s.stats.reboots, "state": dev.state,
             "final_left": final_left, "last_acked": last_acked, "last_timed_out": last_timed_out,
-            "hub_stats": {k2: s.stats[k2] for k2 in ("retries", "events", "duplicate_events", "unmatched_answers",
+            "hub_stats": {k2: s.stats.as_dict()[k2] for k2 in ("retries", "events", "duplicate_events", "unmatched_answers",
                                                      "link_lost", "rehandshakes", "not_linked", "unknown_frames")},
             "hub_rx_counters": health.hub_counters,
             "device_rx_counters": health.device_counters,
