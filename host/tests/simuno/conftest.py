@@ -173,6 +173,20 @@ def drain_events(evs: Any, quiet: float = 0.4) -> List[Any]:
         got.append(ev)
 
 
+def take(stream: Any, n: int, deadline: float) -> List[Any]:
+    """``n`` samples (or events) from ``stream``, waiting at most ``deadline`` seconds in all (a
+    simulated Uno on a busy machine runs slower than real time; what counts is what it sends)."""
+    got: List[Any] = []
+    end = time.monotonic() + deadline
+    while len(got) < n:
+        left = end - time.monotonic()
+        x = stream.get(left) if left > 0 else None
+        if x is None:
+            break
+        got.append(x)
+    return got
+
+
 def wait_until(predicate: Callable[[], Any], timeout: float = 5.0, what: str = "condition",
                interval: float = 0.02) -> Any:
     """Poll ``predicate`` until it returns something truthy (returned); AssertionError after ``timeout``."""

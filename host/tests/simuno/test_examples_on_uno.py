@@ -13,7 +13,7 @@ from hubwire.errors import InvalidValue, NakError
 from hubwire.testing import tap_of
 from hubwire.wire.messages import NakCode
 
-from .conftest import REPO, Examples, drain_events, wait_until
+from .conftest import REPO, Examples, drain_events, take, wait_until
 
 # What each sketch declares, as the hub shows it: (name, access, type, unit, min, max, failsafe).
 DECLARED = {
@@ -100,10 +100,11 @@ def test_failsafe_stops_the_motor_when_the_hub_goes_silent(examples: Examples) -
 def test_streaming_sends_samples_at_the_asked_rate(examples: Examples) -> None:
     dev = examples.start("Streaming")
     hz = 20
+    need = int(0.9 * hz * 1.5)  # 1.5 s worth
     with dev.stream("light", hz=hz, meta=True) as light, dev.stream("uptime", hz=hz, meta=True) as up:
         assert light.granted_ms == 50 and up.granted_ms == 50
-        time.sleep(1.5)
-        got = {"light": drain_events(light, 0), "uptime": drain_events(up, 0)}
+        # counted, not timed by the host: 10 x the time they take at the asked rate
+        got = {"light": take(light, need, 15.0), "uptime": take(up, need, 15.0)}
     for name, samples in got.items():
         assert len(samples) >= 0.9 * hz * 1.5 - 2, f"{name}: {len(samples)} samples"
         since = [x.since_ms for x in samples[1:]]
