@@ -15,6 +15,7 @@ import abc
 import asyncio
 import errno
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable, Dict, Optional
 
@@ -31,7 +32,9 @@ READ_SIZE = 65536
 
 
 class Transport(abc.ABC):
-    """One device's byte pipe. All methods are called on the session's event loop thread."""
+    """One device's byte pipe. :meth:`open` and :meth:`close` are called on the session's event loop
+    thread, :meth:`write` from any thread (the synchronous API writes from the calling thread); the
+    callbacks are made on the loop thread."""
 
     #: what this transport reaches (for messages)
     url: str = ""
@@ -69,6 +72,8 @@ class SerialTransport(Transport):
         self._on_data: Optional[DataCallback] = None
         self._on_lost: Optional[LostCallback] = None
         self._reader: Optional[ThreadPoolExecutor] = None
+        self._wlock = threading.Lock()
+        self._loop_thread = 0
 
     @property
     def is_open(self) -> bool:
@@ -85,8 +90,10 @@ class SerialTransport(Transport):
             port.reset_input_buffer()
         except Exception:  # noqa: BLE001 - not every URL handler supports it
             pass
-        self._port, self._loop, self._on_data, self._on_lost = port, loop, on_data, on_lost
-        self._wbuf.clear()
+        with self._wlock:
+            self._port, self._loop, self._on_data, self._on_lost = port, loop, on_data, on_lost
+            self._wbuf.clear()
+        self._loop_thread = threading.get_ident()
         fd = _fileno(port)
         if fd is None:
             self._start_thread_reader(port)
@@ -117,41 +124,59 @@ class SerialTransport(Transport):
         self._on_data(data)  # type: ignore[misc]
 
     def write(self, data: bytes) -> None:
-        port = self._port
-        if port is None:
-            return
-        if self._fd is None or not self._raw_fd:
+        with self._wlock:
+            port, fd = self._port, self._fd
+            if port is None:
+                return
+            if fd is None or not self._raw_fd:
+                try:
+                    port.write(data)
+                except (OSError, serial.SerialException) as e:
+                    self._fail_soon(port, e)
+                return
+            if self._wbuf:
+                if len(self._wbuf) < MAX_WRITE_BACKLOG:
+                    self._wbuf += data
+                return
             try:
-                port.write(data)
-            except (OSError, serial.SerialException) as e:
-                self._failed(e)
-            return
-        if self._wbuf:
-            if len(self._wbuf) < MAX_WRITE_BACKLOG:
-                self._wbuf += data
-            return
-        try:
-            n = os.write(self._fd, data)
-        except BlockingIOError:
-            n = 0
-        except OSError as e:
-            self._failed(e)
-            return
-        if n < len(data):
-            self._wbuf += data[n:]
+                n = os.write(fd, data)
+            except BlockingIOError:
+                n = 0
+            except OSError as e:
+                self._fail_soon(port, e)
+                return
+            if n < len(data):
+                # the rest goes when the port can take it (the loop watches for that)
+                self._wbuf += data[n:]
+                self._loop.call_soon_threadsafe(self._watch_writable, port)  # type: ignore[union-attr]
+
+    def _watch_writable(self, port: Any) -> None:
+        if self._port is port and self._fd is not None and self._wbuf:
             self._loop.add_writer(self._fd, self._writable)  # type: ignore[union-attr]
 
-    def _writable(self) -> None:
+    def _fail_soon(self, port: Any, exc: BaseException) -> None:
+        """A write failed (any thread, the write lock held): report it from the loop."""
         try:
-            n = os.write(self._fd, self._wbuf)  # type: ignore[arg-type]
-        except BlockingIOError:
-            return
-        except OSError as e:
-            self._failed(e)
-            return
-        del self._wbuf[:n]
-        if not self._wbuf:
-            self._loop.remove_writer(self._fd)  # type: ignore[union-attr, arg-type]
+            self._loop.call_soon_threadsafe(self._fail_if_current, port, exc)  # type: ignore[union-attr]
+        except RuntimeError:  # the loop is closed: nobody to tell
+            pass
+
+    def _fail_if_current(self, port: Any, exc: BaseException) -> None:
+        if self._port is port:
+            self._failed(exc)
+
+    def _writable(self) -> None:
+        with self._wlock:
+            try:
+                n = os.write(self._fd, self._wbuf)  # type: ignore[arg-type]
+            except BlockingIOError:
+                return
+            except OSError as e:
+                self._fail_soon(self._port, e)
+                return
+            del self._wbuf[:n]
+            if not self._wbuf:
+                self._loop.remove_writer(self._fd)  # type: ignore[union-attr, arg-type]
 
     def _failed(self, exc: BaseException) -> None:
         cb = self._on_lost
@@ -160,13 +185,14 @@ class SerialTransport(Transport):
             cb(exc)
 
     def close(self) -> None:
-        port, self._port = self._port, None
-        self._on_data = self._on_lost = None
-        if self._fd is not None and self._loop is not None and not self._loop.is_closed():
-            self._loop.remove_reader(self._fd)
-            self._loop.remove_writer(self._fd)
-        self._fd = None
-        self._wbuf.clear()
+        with self._wlock:
+            port, self._port = self._port, None
+            self._on_data = self._on_lost = None
+            if self._fd is not None and self._loop is not None and not self._loop.is_closed():
+                self._loop.remove_reader(self._fd)
+                self._loop.remove_writer(self._fd)
+            self._fd = None
+            self._wbuf.clear()
         if port is not None:
             try:
                 port.close()

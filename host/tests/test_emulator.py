@@ -460,7 +460,8 @@ def test_connect_to_a_missing_port_fails_clearly(tmp_path: Any) -> None:
 def test_health_reports_heartbeats(rover: Any) -> None:
     wait_until(lambda: rover.health().device_heartbeats >= 2, 3, "two device heartbeats")
     h = rover.health()
-    assert h.state == "ready" and h.heartbeat_age is not None and h.heartbeat_age < 0.5
     assert h.device_heartbeat_ms == 250
+    # younger than the loss timeout (4 device heartbeat intervals), or the link would not be ready
+    assert h.state == "ready" and h.heartbeat_age is not None and h.heartbeat_age < 4 * 0.250
     assert h.hub_counters == {"crc": 0, "overflow": 0, "dropped": 0}
     assert h.device_counters == {"crc": 0, "overflow": 0, "dropped": 0}

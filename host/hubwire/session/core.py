@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import threading
 import time
 from typing import Any, Callable, List, Optional
 
@@ -67,6 +68,8 @@ class SessionCore:
         self._discovering: Optional["asyncio.Task[None]"] = None
         self._discovery_timer: Optional[asyncio.TimerHandle] = None
         self._changed: "asyncio.Future[None]" = self.loop.create_future()
+        #: notified with every state change and device hello, for threads waiting on the core
+        self.sync_cv = threading.Condition()
 
     # ------------------------------------------------------------------------------ queries
 
@@ -112,6 +115,8 @@ class SessionCore:
         """Wake everything waiting for a state change."""
         fut, self._changed = self._changed, self.loop.create_future()
         fut.set_result(None)
+        with self.sync_cv:
+            self.sync_cv.notify_all()
 
     async def _changes(self, timeout: float) -> None:
         await asyncio.wait((self._changed,), timeout=max(0.0, timeout))
@@ -174,24 +179,26 @@ class SessionCore:
         self.events.close()
         self._notify()
 
+    def ready_by(self, deadline: float) -> bool:
+        """True when READY; LinkLost / HubwireError if lost / closed, Timeout once past ``deadline``
+        still connecting; False: not yet (wait for a change)."""
+        st = self.state
+        if st is State.READY:
+            return True
+        if st is State.CLOSED:
+            raise HubwireError("session is closed")
+        if st is State.LOST:
+            raise LinkLost(f"link to {self.url} is down")
+        if time.monotonic() >= deadline:
+            extra = f": {self.discovery_error}" if self.discovery_error else ""
+            raise Timeout(f"device on {self.url} is not ready (re-handshaking){extra}")
+        return False
+
     async def check_ready(self, timeout: float) -> None:
-        """Return once READY; LinkLost / HubwireError at once if lost / closed, Timeout if still
-        connecting after ``timeout`` s."""
-        deadline = None
-        while True:
-            st = self.state
-            if st is State.READY:
-                return
-            if st is State.CLOSED:
-                raise HubwireError("session is closed")
-            if st is State.LOST:
-                raise LinkLost(f"link to {self.url} is down")
-            now = time.monotonic()
-            deadline = deadline or now + timeout
-            if now >= deadline:
-                extra = f": {self.discovery_error}" if self.discovery_error else ""
-                raise Timeout(f"device on {self.url} is not ready (re-handshaking){extra}")
-            await self._changes(deadline - now)
+        """Return once READY (see :meth:`ready_by`), waiting up to ``timeout`` s while connecting."""
+        deadline = time.monotonic() + timeout
+        while not self.ready_by(deadline):
+            await self._changes(deadline - time.monotonic())
 
     # ------------------------------------------------------------------------ frames from the link
 
@@ -212,6 +219,8 @@ class SessionCore:
             self.stats.unknown_frames += 1
 
     def on_hello(self, outcome: HelloOutcome) -> None:
+        with self.sync_cv:
+            self.sync_cv.notify_all()  # threads waiting for a re-link count hellos
         if outcome is HelloOutcome.VERSION:
             if self.fatal is None:
                 self.fatal = ProtocolVersionError(self.link.rejected_version, m.PROTOCOL_VERSION)

@@ -73,12 +73,12 @@ class Discovery:
         if total == 0:
             return b""
         want = max(1, min(255, HUB_MAX_PAYLOAD - 4, hello.max_payload - 4))
-        async with self.core.tx.gate.shared():
-            job = _Download(self.core, total, want)
-            try:
-                return await job.run()
-            finally:
-                job.forget()
+        # no gate: discovery runs only while the session is not READY, when no other transaction runs
+        job = _Download(self.core, total, want)
+        try:
+            return await job.run()
+        finally:
+            job.forget()
 
 
 class _Download:
@@ -151,8 +151,7 @@ class _Download:
                     if now - core.progress_at >= core.connect_timeout:
                         raise Timeout(f"descriptor chunk at offset {off} not answered after "
                                       f"{p.tries} tries: no progress for {core.connect_timeout:g} s")
-                    core.stats.retries += 1
-                    core.tx.transmit(p)
+                    core.tx.retry(p)
                 continue
             a = p.fut.result()  # raises LinkLost and the like
             if a.type == m.NAK and a.payload[:1] == bytes((NakCode.NOT_LINKED,)):

@@ -1,5 +1,8 @@
 """The synchronous :class:`Session`: a thin facade over a :class:`SessionCore` that runs on the
-process's shared hub event loop (see :mod:`hubwire.session.runner`). Thread-safe."""
+process's shared hub event loop (see :mod:`hubwire.session.runner`). Thread-safe.
+
+Transactions are driven by the calling thread (:mod:`.blocking`: it writes its frame and the loop
+wakes it with the answer); everything else runs on the loop through :func:`run_sync`."""
 from __future__ import annotations
 
 from typing import Any, Callable, Dict, Optional
@@ -9,11 +12,12 @@ from ..errors import HubwireError
 from ..transport import SerialTransport, Transport
 from ..wire import messages as m
 from ..wire.frame import Frame
+from . import blocking
 from .core import SessionCore
 from .events import QueueSink
 from .records import LinkHealth, State, Stats
 from .runner import ThreadDispatcher, acquire_loop, on_loop_thread, release_loop, run_sync
-from .streams import ThreadSubscription
+from .streams import ThreadSubscription, granted_interval
 
 __all__ = ["Session"]
 
@@ -50,6 +54,7 @@ class Session:
         self._core: Optional[SessionCore] = None
         self._loop: Any = None
         self._dispatcher: Optional[ThreadDispatcher] = None
+        self._gate = blocking.ThreadGate()
 
     # ---------------------------------------------------------------------------- lifecycle
 
@@ -144,7 +149,9 @@ class Session:
     def transact(self, type: int, id: int, payload: bytes = b"", *, timeout: Optional[float] = None,
                  what: str = "") -> Frame:
         """Send one transaction and return its answer; see :meth:`Transactions.transact`."""
-        return self._run(self.core.tx.transact(type, id, payload, timeout=timeout, what=what))  # type: ignore[no-any-return]
+        if self._loop is None:
+            raise HubwireError("session is closed")
+        return blocking.transact(self.core, self._gate, type, id, payload, timeout=timeout, what=what)
 
     def request(self, id: int, *, timeout: Optional[float] = None, what: str = "") -> bytes:
         """``R``: read a channel; returns the ``r`` payload."""
@@ -159,14 +166,21 @@ class Session:
 
     def subscribe(self, id: int, interval_ms: int, *, timeout: Optional[float] = None, what: str = "") -> int:
         """``S``: (re)subscribe or cancel (0); returns the granted interval."""
-        return self._run(self.core.streams.subscribe(id, interval_ms, timeout=timeout, what=what))  # type: ignore[no-any-return]
+        a = self.transact(m.SUBSCRIBE, id, m.Subscribe(interval_ms).pack(), timeout=timeout, what=what)
+        return granted_interval(a, interval_ms)
 
     # ------------------------------------------------------------------------------ streams
 
     def open_stream(self, id: int, interval_ms: int, maxlen: int = 1024, what: str = "") -> ThreadSubscription:
         """Subscribe; returns a subscription whose queue receives :class:`StreamSample`."""
         sub = ThreadSubscription(id, interval_ms, maxlen)
-        self._run(self.core.streams.open(sub, what))
+        streams = self.core.streams
+        interval = self._run(self._call(streams.attach, sub))
+        try:
+            sub.granted_ms = self.subscribe(id, interval, what=what)
+        except BaseException:
+            self._run(self._call(streams.forget, sub))
+            raise
         return sub
 
     def close_stream(self, sub: ThreadSubscription, wait: bool = True) -> None:
@@ -175,7 +189,12 @@ class Session:
             sub.end(StopIteration())
             return
         if wait:
-            self._run(self.core.streams.close(sub))
+            interval = self._run(self._call(self.core.streams.detach, sub))
+            if interval is not None:
+                try:
+                    self.subscribe(sub.channel_id, interval)
+                except HubwireError:
+                    pass
         elif on_loop_thread():  # a Stream collected by the garbage collector on the loop thread
             self.core.streams.close_nowait(sub)
         else:

@@ -72,6 +72,8 @@ class Link:
         self.peer_hb_at: Optional[float] = None
         self.peer_hb_count = 0
         self.rejected_version = 0
+        #: device hellos heard (threads waiting for a re-link watch it)
+        self.hello_count = 0
         self.last_rx = 0.0
         self._peer_hb_ms = 250
         self._hb_counter = 0
@@ -255,6 +257,7 @@ class Link:
         prev, was_linked = self.device_hello, self.linked
         self.device_hello = h
         self._peer_hb_ms = h.heartbeat_ms or 250
+        self.hello_count += 1
         for w in self._hello_waiters:
             if not w.done():
                 w.set_result(None)

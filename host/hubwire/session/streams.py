@@ -17,7 +17,14 @@ from ..wire import messages as m
 from ..wire.frame import Frame
 from .records import StreamSample
 
-__all__ = ["Subscription", "ThreadSubscription", "AsyncSubscription", "Streams"]
+__all__ = ["Subscription", "ThreadSubscription", "AsyncSubscription", "Streams", "granted_interval"]
+
+
+def granted_interval(answer: Frame, asked: int) -> int:
+    """The interval the device granted in its answer to a subscribe."""
+    if answer.type != m.ACK:
+        raise HubwireError(f"unexpected answer type 0x{answer.type:02x} to a subscribe")
+    return m.SubscribeAck.unpack(answer.payload).granted_ms if len(answer.payload) >= 2 else asked
 
 
 class Subscription:
@@ -95,15 +102,22 @@ class Streams:
     async def subscribe(self, id: int, interval_ms: int, *, timeout: Optional[float] = None, what: str = "") -> int:
         """``S``: (re)subscribe or cancel (0); returns the granted interval."""
         a = await self.core.tx.transact(m.SUBSCRIBE, id, m.Subscribe(interval_ms).pack(), timeout=timeout, what=what)
-        if a.type != m.ACK:
-            raise HubwireError(f"unexpected answer type 0x{a.type:02x} to a subscribe")
-        return m.SubscribeAck.unpack(a.payload).granted_ms if len(a.payload) >= 2 else interval_ms
+        return granted_interval(a, interval_ms)
 
-    async def open(self, sub: Subscription, what: str = "") -> Subscription:
-        """Add a consumer and (re)subscribe at the smallest interval its channel's consumers want."""
+    def attach(self, sub: Subscription) -> int:
+        """Add a consumer; the interval to ask the device for: the smallest its channel's consumers want."""
         others = self.subs.setdefault(sub.channel_id, [])
         interval = min([s.interval_ms for s in others] + [sub.interval_ms])
         others.append(sub)
+        return interval
+
+    def forget(self, sub: Subscription) -> None:
+        """Undo :meth:`attach` (the subscribe failed)."""
+        self._remove(sub)
+
+    async def open(self, sub: Subscription, what: str = "") -> Subscription:
+        """Add a consumer and (re)subscribe at the smallest interval its channel's consumers want."""
+        interval = self.attach(sub)
         try:
             sub.granted_ms = await self.subscribe(sub.channel_id, interval, what=what)
         except BaseException:
@@ -119,7 +133,7 @@ class Streams:
             self.subs.pop(sub.channel_id, None)
         return list(lst)
 
-    def _detach(self, sub: Subscription) -> Optional[int]:
+    def detach(self, sub: Subscription) -> Optional[int]:
         """Forget a consumer; the interval to ask the device for now (0 cancels), None if not linked."""
         remaining = self._remove(sub)
         sub.end(StopIteration())
@@ -129,7 +143,7 @@ class Streams:
 
     async def close(self, sub: Subscription) -> None:
         """End a consumer; cancels the subscription on the device when it was the channel's last."""
-        interval = self._detach(sub)
+        interval = self.detach(sub)
         if interval is not None:
             try:
                 await self.subscribe(sub.channel_id, interval)
@@ -138,7 +152,7 @@ class Streams:
 
     def close_nowait(self, sub: Subscription) -> None:
         """Like :meth:`close` without waiting for the device's answer (one ``S``, not retried)."""
-        interval = self._detach(sub)
+        interval = self.detach(sub)
         if interval is not None:
             self.send_subscribe(sub.channel_id, interval)
 

@@ -6,7 +6,8 @@
     tap.tx_filter = lambda wire: ...        # False: this write is not sent
     tap.rx_filter = lambda frame: ...       # False: this received frame never reaches the hub
 
-Filters run on the hub's event loop; they must not block.
+``tx_filter`` runs on the thread that writes (the caller's, for the synchronous API's
+transactions), ``rx_filter`` on the hub's event loop; they must not block.
 """
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import threading
 import time
 from dataclasses import replace
 from typing import Any, Dict, Optional
@@ -33,12 +34,14 @@ class FaultyTransport(WrappingTransport):
         self._loop: Optional[asyncio.AbstractEventLoop] = None
         self._on_data: Optional[DataCallback] = None
         self._timer: Optional[asyncio.TimerHandle] = None
+        self._loop_thread = 0
         self.opens = 0
 
     def open(self, loop: asyncio.AbstractEventLoop, on_data: DataCallback, on_lost: LostCallback) -> None:
         self.inner.open(loop, self._from_device, on_lost)
         self.opens += 1
         self._loop, self._on_data = loop, on_data
+        self._loop_thread = threading.get_ident()
         now = time.monotonic()
         for d in self._dirs.values():
             d.discard()
@@ -53,6 +56,9 @@ class FaultyTransport(WrappingTransport):
         self.inner.close()
 
     def write(self, data: bytes) -> None:
+        if self._loop is not None and threading.get_ident() != self._loop_thread:
+            self._loop.call_soon_threadsafe(self.write, data)  # the fault engine lives on the loop
+            return
         self._dirs["h2d"].ingest(data, time.monotonic())
         self._pump()
 
