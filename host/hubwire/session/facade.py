@@ -151,6 +151,8 @@ class Session:
         """Send one transaction and return its answer; see :meth:`Transactions.transact`."""
         if self._loop is None:
             raise HubwireError("session is closed")
+        if on_loop_thread():
+            raise RuntimeError("hubwire: a synchronous call cannot be made on the hub's event loop thread")
         return blocking.transact(self.core, self._gate, type, id, payload, timeout=timeout, what=what)
 
     def request(self, id: int, *, timeout: Optional[float] = None, what: str = "") -> bytes:
