@@ -215,6 +215,28 @@ class FaultLink:
         self._dirs["h2d"].discard()
         self._dev_retry_at = now + self.reopen_interval
 
+    def _read_ready(self, r: List[int], now: float) -> None:
+        """Feed what the hub and the device sent (the fds select() found readable) to the faults."""
+        if self._master in r:
+            try:
+                data = os.read(self._master, 4096)
+            except OSError:  # BlockingIOError; EIO cannot happen while we hold the slave open
+                data = b""
+            if data:
+                self._dirs["h2d"].ingest(data, now)
+        if self._dev is not None and self._dev in r:
+            try:
+                data = os.read(self._dev, 4096)
+                if not data:
+                    raise OSError(errno.EIO, "device closed")
+            except (BlockingIOError, InterruptedError):
+                data = b""
+            except OSError:
+                self._device_lost(now)
+                data = b""
+            if data:
+                self._dirs["d2h"].ingest(data, now)
+
     def _run(self) -> None:
         h2d, d2h = self._dirs["h2d"], self._dirs["d2h"]
         while not self._stop.is_set():
@@ -245,27 +267,7 @@ class FaultLink:
                 except OSError:
                     pass
             with self._lock:
-                if self._master in r:
-                    try:
-                        data = os.read(self._master, 4096)
-                    except (BlockingIOError, InterruptedError):
-                        data = b""
-                    except OSError:
-                        data = b""  # cannot happen while we hold the slave open
-                    if data:
-                        h2d.ingest(data, now)
-                if self._dev is not None and self._dev in r:
-                    try:
-                        data = os.read(self._dev, 4096)
-                        if not data:
-                            raise OSError(errno.EIO, "device closed")
-                    except (BlockingIOError, InterruptedError):
-                        data = b""
-                    except OSError:
-                        self._device_lost(now)
-                        data = b""
-                    if data:
-                        d2h.ingest(data, now)
+                self._read_ready(r, now)
                 h2d.tick(now)
                 d2h.tick(now)
                 if self._dev is not None and not h2d.write_to(self._dev, now):

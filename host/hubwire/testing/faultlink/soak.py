@@ -88,6 +88,180 @@ def plausible(name: str, value: Any, written: set) -> bool:
     return True
 
 
+class _Soak:
+    """One soak run on a connected device: the load (writes, reads, selftests), the listeners
+    (events, link losses, streams) and the counts."""
+
+    def __init__(self, dev: Any, fl: Any, log: Callable[[str], None]) -> None:
+        import hubwire
+
+        self.hw = hubwire
+        self.dev, self.fl, self.log = dev, fl, log
+        self.applied0, self.failsafes0 = dev.applied, dev.failsafes
+        self.events: List[Tuple[int, bool]] = []
+        self.ev_cv = threading.Condition()
+        self.lost: List[float] = []
+        dev.on("*", self._on_event)
+        dev.on("link_lost", lambda: self.lost.append(time.monotonic()))
+        self.written = {0.0}
+        self.k = self.acked = self.timeouts = self.link_lost_errors = self.naks = 0
+        self.reads = self.bad_reads = self.read_timeouts = 0
+        self.bad_values: List[float] = []
+        self.st_calls = self.st_returned = self.st_timeouts = self.st_timeout_max = 0
+        self.st_batches: List[int] = []
+        self.last_acked: Optional[float] = None
+        self.last_timed_out: List[float] = []
+        self.samples = {n: 0 for n in STREAMS}
+        self.bad_samples: List[Any] = []
+        self.stop_streams = threading.Event()
+        self.opened: List[Any] = []
+        self.consumers: List[threading.Thread] = []
+
+    def _on_event(self, ev: Any) -> None:
+        with self.ev_cv:
+            self.events.append((ev.seq, ev.value))
+            self.ev_cv.notify_all()
+
+    # streams (opened on the clean link): many more frames, every sample checked
+    def start_streams(self) -> None:
+        self.opened = [self.dev.stream(n, interval_ms=10, timeout=1.0) for n in STREAMS]
+        self.consumers = [threading.Thread(target=self._consume, args=(st, st.channel.name), daemon=True)
+                          for st in self.opened]
+        for t in self.consumers:
+            t.start()
+
+    def _consume(self, st: Any, name: str) -> None:
+        while not self.stop_streams.is_set():
+            try:
+                v = next(st)
+            except self.hw.Timeout:
+                continue
+            except (self.hw.LinkLost, StopIteration):
+                return
+            self.samples[name] += 1
+            if not plausible(name, v, self.written):
+                self.bad_samples.append((name, v))
+
+    def stop_streams_now(self) -> None:
+        self.stop_streams.set()
+        for t in self.consumers:
+            t.join(5)
+        for st in self.opened:
+            try:
+                st.close()  # unsubscribe; on a faulty link this may time out, dev.close() ends it anyway
+            except self.hw.HubwireError:
+                pass
+
+    # the load
+    def step(self) -> None:
+        """One write with a value never written before, a read every 10, a selftest every 40."""
+        hw, dev = self.hw, self.dev
+        self.k += 1
+        v = value_for(self.k)
+        self.written.add(v)
+        try:
+            dev.left = v
+            self.acked += 1
+            self.last_acked = v
+            self.last_timed_out = []
+        except hw.Timeout:
+            self.timeouts += 1
+            self.last_timed_out.append(v)
+        except hw.LinkLost:
+            self.link_lost_errors += 1
+            time.sleep(0.05)
+            return
+        except hw.NakError as e:  # a corrupted frame that passed the CRC would show here
+            self.naks += 1
+            self.log(f"soak: NAK on write {self.k}: {e}")
+        if self.k % 10 == 0:
+            self._read()
+        if self.k % 40 == 0:
+            self._selftest()
+
+    def _read(self) -> None:
+        try:
+            got = self.dev.left
+            self.reads += 1
+            if got not in self.written:
+                self.bad_reads += 1
+                self.bad_values.append(got)
+        except (self.hw.Timeout, self.hw.LinkLost):
+            self.read_timeouts += 1
+
+    def _selftest(self) -> None:
+        self.st_calls += 1
+        try:
+            q = self.dev.selftest(4)
+            self.st_returned += q
+            self.st_batches.append(q)
+        except self.hw.Timeout:
+            self.st_timeouts += 1
+            self.st_timeout_max += 4
+            self.st_batches.append(-1)
+        except self.hw.LinkLost:
+            self.link_lost_errors += 1
+
+    def run(self, seconds: Optional[float], frames: Optional[int]) -> Tuple[float, Dict[str, Any], int]:
+        """The load until ``seconds`` passed or ``frames`` went through; (elapsed, proxy stats, f0)."""
+        t0 = time.monotonic()
+        f0 = self.fl.stats()["frames"]
+        next_report = t0 + 10
+        while True:
+            now = time.monotonic()
+            if seconds is not None and now - t0 >= seconds:
+                break
+            if frames is not None and self.fl.stats()["frames"] - f0 >= frames:
+                break
+            if now >= next_report:
+                st = self.fl.stats()
+                self.log(f"soak: {now - t0:.0f} s, {st['frames'] - f0} frames, {st['faults']} faults, "
+                         f"{self.acked} acked, {self.timeouts} timeouts, {len(self.events)} events")
+                next_report = now + 10
+            self.step()
+        return time.monotonic() - t0, self.fl.stats(), f0
+
+    def settle(self) -> Tuple[List[Tuple[int, bool]], int, int, float]:
+        """On the clean link: every queued event in, then the device's counters."""
+        lo = self.st_returned
+        with self.ev_cv:
+            self.ev_cv.wait_for(lambda: len(self.events) >= lo, 15)
+        time.sleep(0.5)  # retried events still in flight (there should be none beyond the queued ones)
+        applied = _retry(lambda: self.dev.applied, "read applied") - self.applied0
+        failsafes = _retry(lambda: self.dev.failsafes, "read failsafes") - self.failsafes0
+        final_left = _retry(lambda: self.dev.left, "read left")
+        with self.ev_cv:
+            evs = list(self.events)
+        return evs, applied, failsafes, final_left
+
+    def result(self, elapsed: float, during: Dict[str, Any], f0: int, frames: Optional[int], seed: int) -> Dict[str, Any]:
+        evs, applied, failsafes, final_left = self.settle()
+        s, dev = self.dev.session, self.dev
+        seq_steps = [(b[0] - a[0]) & 0xFF for a, b in zip(evs, evs[1:])]
+        expected_values = [i % 2 == 0 for q in self.st_batches if q >= 0 for i in range(q)]
+        health = s.health()
+        stats = s.stats.as_dict()
+        return {
+            "mode": "frames" if frames is not None else "seconds", "seconds": round(elapsed, 1), "seed": seed,
+            "faults": self.fl.config()["h2d"],
+            "proxy": {"frames": during["frames"] - f0, "faults": during["faults"], "h2d": during["h2d"], "d2h": during["d2h"]},
+            "writes": self.k, "acked": self.acked, "timeouts": self.timeouts, "naks": self.naks,
+            "link_lost_errors": self.link_lost_errors, "applied": applied, "applied_minus_acked": applied - self.acked,
+            "reads": self.reads, "bad_reads": self.bad_reads, "bad_values": self.bad_values[:10],
+            "read_timeouts": self.read_timeouts, "selftest_calls": self.st_calls, "events_queued": self.st_returned,
+            "selftest_timeouts": self.st_timeouts, "events_delivered": len(evs),
+            "event_seq_gaps_or_dups": sum(1 for d in seq_steps if d != 1),
+            "event_order_ok": self.st_timeouts > 0 or [v for _, v in evs] == expected_values,
+            "samples": dict(self.samples), "bad_samples": len(self.bad_samples),
+            "bad_sample_values": self.bad_samples[:10], "failsafes": failsafes, "link_lost_callbacks": len(self.lost),
+            "reboots": s.stats.reboots, "state": dev.state, "final_left": final_left, "last_acked": self.last_acked,
+            "last_timed_out": self.last_timed_out,
+            "hub_stats": {k2: stats[k2] for k2 in ("retries", "events", "duplicate_events", "unmatched_answers",
+                                                   "link_lost", "rehandshakes", "not_linked", "unknown_frames")},
+            "hub_rx_counters": health.hub_counters, "device_rx_counters": health.device_counters,
+        }
+
+
 def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, seed: int = 1,
              faults: Faults = SOAK_FAULTS, workdir: str = "/tmp", binary: Optional[str] = None,
              streams: bool = True, log: Callable[[str], None] = print) -> Dict[str, Any]:
@@ -105,158 +279,16 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
     dev = None
     try:
         dev = hubwire.connect(hub_link, cache_dir=False, timeout=10)
-        s = dev.session
-        applied0 = dev.applied
-        failsafes0 = dev.failsafes
-        events: List[Tuple[int, bool]] = []
-        ev_lock = threading.Lock()
-        ev_cv = threading.Condition(ev_lock)
-
-        def on_event(ev: Any) -> None:
-            with ev_cv:
-                events.append((ev.seq, ev.value))
-                ev_cv.notify_all()
-
-        dev.on("*", on_event)
-        lost: List[float] = []
-        dev.on("link_lost", lambda: lost.append(time.monotonic()))
-
-        written = {0.0}
-        acked = timeouts = link_lost_errors = naks = 0
-        reads = bad_reads = read_timeouts = 0
-        bad_values: List[float] = []
-        st_calls = st_returned = st_timeouts = st_timeout_max = 0
-        st_batches: List[int] = []
-        last_acked: Optional[float] = None
-        last_timed_out: List[float] = []
-
-        # Streams (opened on the clean link): many more frames, every sample checked.
-        samples = {n: 0 for n in STREAMS}
-        bad_samples: List[Any] = []
-        stop_streams = threading.Event()
-
-        def consume(st: Any, name: str) -> None:
-            while not stop_streams.is_set():
-                try:
-                    v = next(st)
-                except hubwire.Timeout:
-                    continue
-                except (hubwire.LinkLost, StopIteration):
-                    return
-                samples[name] += 1
-                if not plausible(name, v, written):
-                    bad_samples.append((name, v))
-
-        opened = [dev.stream(n, interval_ms=10, timeout=1.0) for n in STREAMS] if streams else []
-        consumers = [threading.Thread(target=consume, args=(st, st.channel.name), daemon=True) for st in opened]
-        for t in consumers:
-            t.start()
-
+        soak = _Soak(dev, fl, log)
+        if streams:
+            soak.start_streams()
         fl.set_faults(**{k: getattr(faults, k) for k in ("ber", "drop", "dup", "truncate", "garbage_every",
                                                         "garbage_len", "delay", "stall_every", "stall_ms")})
-        t0 = time.monotonic()
-        f0 = fl.stats()["frames"]
-        k = 0
-        next_report = t0 + 10
-        while True:
-            now = time.monotonic()
-            if seconds is not None and now - t0 >= seconds:
-                break
-            if frames is not None and fl.stats()["frames"] - f0 >= frames:
-                break
-            if now >= next_report:
-                st = fl.stats()
-                log(f"soak: {now - t0:.0f} s, {st['frames'] - f0} frames, {st['faults']} faults, "
-                    f"{acked} acked, {timeouts} timeouts, {len(events)} events")
-                next_report = now + 10
-            k += 1
-            v = value_for(k)
-            written.add(v)
-            try:
-                dev.left = v
-                acked += 1
-                last_acked = v
-                last_timed_out = []
-            except hubwire.Timeout:
-                timeouts += 1
-                last_timed_out.append(v)
-            except hubwire.LinkLost:
-                link_lost_errors += 1
-                time.sleep(0.05)
-                continue
-            except hubwire.NakError as e:  # a corrupted frame that passed the CRC would show here
-                naks += 1
-                log(f"soak: NAK on write {k}: {e}")
-            if k % 10 == 0:
-                try:
-                    got = dev.left
-                    reads += 1
-                    if got not in written:
-                        bad_reads += 1
-                        bad_values.append(got)
-                except (hubwire.Timeout, hubwire.LinkLost):
-                    read_timeouts += 1
-            if k % 40 == 0:
-                st_calls += 1
-                try:
-                    q = dev.selftest(4)
-                    st_returned += q
-                    st_batches.append(q)
-                except hubwire.Timeout:
-                    st_timeouts += 1
-                    st_timeout_max += 4
-                    st_batches.append(-1)
-                except hubwire.LinkLost:
-                    link_lost_errors += 1
-        elapsed = time.monotonic() - t0
-        during = fl.stats()
-        stop_streams.set()
-        for t in consumers:
-            t.join(5)
-        for st in opened:
-            try:
-                st.close()  # unsubscribe; on a faulty link this may time out, dev.close() ends it anyway
-            except hubwire.HubwireError:
-                pass
+        elapsed, during, f0 = soak.run(seconds, frames)
+        soak.stop_streams_now()
         # accounting on a clean link
         fl.set_faults(ber=0.0, drop=0.0, dup=0.0, truncate=0.0, garbage_every=0.0, delay=0.0, stall_every=0.0)
-        lo, hi = st_returned, st_returned + st_timeout_max
-        with ev_cv:
-            ev_cv.wait_for(lambda: len(events) >= lo, 15)
-        time.sleep(0.5)  # retried events still in flight (there should be none beyond hi)
-        applied = _retry(lambda: dev.applied, "read applied") - applied0
-        failsafes = _retry(lambda: dev.failsafes, "read failsafes") - failsafes0
-        final_left = _retry(lambda: dev.left, "read left")
-        with ev_lock:
-            evs = list(events)
-        seq_steps = [(b[0] - a[0]) & 0xFF for a, b in zip(evs, evs[1:])]
-        expected_values = [i % 2 == 0 for q in st_batches if q >= 0 for i in range(q)]
-        health = s.health()
-        result: Dict[str, Any] = {
-            "mode": "frames" if frames is not None else "seconds",
-            "seconds": round(elapsed, 1),
-            "seed": seed,
-            "faults": fl.config()["h2d"],
-            "proxy": {"frames": during["frames"] - f0, "faults": during["faults"],
-                      "h2d": during["h2d"], "d2h": during["d2h"]},
-            "writes": k, "acked": acked, "timeouts": timeouts, "naks": naks,
-            "link_lost_errors": link_lost_errors,
-            "applied": applied, "applied_minus_acked": applied - acked,
-            "reads": reads, "bad_reads": bad_reads, "bad_values": bad_values[:10], "read_timeouts": read_timeouts,
-            "selftest_calls": st_calls, "events_queued": st_returned, "selftest_timeouts": st_timeouts,
-            "events_delivered": len(evs),
-            "event_seq_gaps_or_dups": sum(1 for d in seq_steps if d != 1),
-            "event_order_ok": st_timeouts > 0 or [v for _, v in evs] == expected_values,
-            "samples": dict(samples), "bad_samples": len(bad_samples), "bad_sample_values": bad_samples[:10],
-            "failsafes": failsafes, "link_lost_callbacks": len(lost),
-            "reboots": s.stats.reboots, "state": dev.state,
-            "final_left": final_left, "last_acked": last_acked, "last_timed_out": last_timed_out,
-            "hub_stats": {k2: s.stats.as_dict()[k2] for k2 in ("retries", "events", "duplicate_events", "unmatched_answers",
-                                                     "link_lost", "rehandshakes", "not_linked", "unknown_frames")},
-            "hub_rx_counters": health.hub_counters,
-            "device_rx_counters": health.device_counters,
-        }
-        return result
+        return soak.result(elapsed, during, f0, frames, seed)
     finally:
         if dev is not None:
             dev.close()
