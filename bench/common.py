@@ -5,7 +5,6 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import tempfile
 import time
 from typing import Any, Dict, List, Optional
@@ -16,7 +15,6 @@ OUT = os.path.join(BUILD, "bench")
 RESULTS = os.path.join(OUT, "results")
 SIMUNO = os.path.join(BUILD, "simuno", "simuno")
 EMULATOR = os.path.join(BUILD, "emulator", "hubwire-emulator")
-sys.path.insert(0, os.path.join(ROOT, "host"))
 
 
 def build_sketch(sketch_dir: str, build_dir: str, extra_flags: str = "") -> str:

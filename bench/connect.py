@@ -15,16 +15,15 @@ import argparse
 import os
 import signal
 import statistics
-import sys
 import tempfile
 import threading
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import ROOT, emulator, md_table, row, save, simuno, tmp_link  # noqa: E402
+from common import ROOT, emulator, md_table, row, save, simuno, tmp_link
 
-from hubwire.session import Session  # noqa: E402
-from hubwire.wire import messages as m  # noqa: E402
+from hubwire.session import Session
+from hubwire.testing import tapped
+from hubwire.wire import messages as m
 
 BOOT_DELAY_MS = 300
 ROVER_ELF = os.path.join(ROOT, "build/uno/Rover/Rover.ino.elf")
@@ -37,8 +36,9 @@ class Timed:
         self.hellos: list = []
         self.reconnected = threading.Event()
         self.reconnect_at = 0.0
-        self.s = Session(url, 115200, cache_dir=cache_dir, on_reconnect=self._on_reconnect)
-        self.s.rx_filter = self._rx
+        tap = tapped(url, 115200)
+        tap.rx_filter = self._rx
+        self.s = Session(transport=tap, cache_dir=cache_dir, on_reconnect=self._on_reconnect)
 
     def _rx(self, f) -> bool:
         if f.type == m.HELLO:
@@ -60,7 +60,7 @@ def connect_once(url: str, cache_dir: str):
     t = Timed(url, cache_dir)
     t0, t1 = t.open()
     hello = t.hellos[0][0] if t.hellos else t1
-    info = (t.s.stats["downloads"], t.s.stats["chunk_requests"], len(t.s.descriptor.raw), len(t.s.descriptor.channels))
+    info = (t.s.stats.downloads, t.s.stats.chunk_requests, len(t.s.descriptor.raw), len(t.s.descriptor.channels))
     return t, (t1 - t0) * 1e3, (hello - t0) * 1e3, (t1 - hello) * 1e3, info
 
 

@@ -13,14 +13,12 @@ from __future__ import annotations
 import argparse
 import os
 import resource
-import sys
 import tempfile
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import emulator, md_table, row, save, tmp_link  # noqa: E402
+from common import emulator, md_table, row, save, tmp_link
 
-from hubwire.session import Session  # noqa: E402
+from hubwire.session import Session
 
 
 def cpu() -> float:
@@ -92,7 +90,7 @@ def main() -> None:
     load = os.getloadavg()
     details = f"""### Row 7: one hub, many devices (emulators streaming imu at 100 Hz each)
 
-One hub process, N `Session`s (a reader and a dispatcher thread each), `open_stream(imu, 10 ms)` on every
+One hub process, N `Session`s (all on one event loop thread; a dispatcher thread each), `open_stream(imu, 10 ms)` on every
 device, queues drained every 50 ms. CPU = getrusage(RUSAGE_SELF) user+sys over a {a.window:g} s window / wall
 time (1.0 = one core). The emulators run on the same 2-core machine (load average {load[0]:.1f} at the end).
 

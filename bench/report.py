@@ -13,8 +13,7 @@ import re
 import subprocess
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import RESULTS, ROOT, md_table, row  # noqa: E402
+from common import RESULTS, ROOT, md_table, row
 
 ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many"]
 SCALE = {

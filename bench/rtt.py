@@ -14,16 +14,14 @@ import argparse
 import json
 import os
 import statistics
-import sys
 import tempfile
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import OUT, RESULTS, ROOT, build_sketch, emulator, md_table, row, save, simuno, tmp_link  # noqa: E402
+from common import OUT, RESULTS, ROOT, build_sketch, emulator, md_table, row, save, simuno, tmp_link
 
-from hubwire.session import Session  # noqa: E402
-from hubwire.wire import messages as m  # noqa: E402
-from hubwire.wire.frame import encode_frame  # noqa: E402
+from hubwire.session import Session
+from hubwire.wire import messages as m
+from hubwire.wire.frame import encode_frame
 
 WIRE_BYTES = len(encode_frame(m.REQUEST, 1, 5)) + len(encode_frame(m.RESPONSE, 1, 5, b"\x00\x00"))
 REAL_BAUD = {115200: 117647, 1000000: 1000000}  # what the AVR's UBRR actually produces at 16 MHz

@@ -24,10 +24,10 @@ step() {  # name, command...
 
 [ -x "$PY" ] || { echo "bench: $PY missing: run make setup" >&2; exit 1; }
 make -s emulator simuno uno-firmware >/dev/null || { echo "bench: build failed" >&2; exit 1; }
-if ! "$BENCH_PY" -c "import pymavlink, pySerialTransfer, cobs, serial" 2>/dev/null; then
+if ! "$BENCH_PY" -c "import pymavlink, pySerialTransfer, cobs, serial, hubwire" 2>/dev/null; then
 	echo "== bench: creating build/bench-venv (pymavlink, pySerialTransfer)" >&2
 	python3 -m venv build/bench-venv &&
-		build/bench-venv/bin/pip install -q pymavlink pySerialTransfer cobs pyserial >&2 || status=1
+		build/bench-venv/bin/pip install -q pymavlink pySerialTransfer cobs pyserial -e host >&2 || status=1
 fi
 mkdir -p build/bench
 rm -rf build/bench/results

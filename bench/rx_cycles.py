@@ -12,10 +12,8 @@ from __future__ import annotations
 import os
 import statistics
 import subprocess
-import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import OUT, ROOT, SIMUNO, build_sketch, md_table, row, save, tmp_link  # noqa: E402
+from common import OUT, ROOT, SIMUNO, build_sketch, md_table, row, save, tmp_link
 
 F_CPU = 16_000_000
 TARGET = 80  # cycles per wire byte

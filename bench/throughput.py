@@ -18,15 +18,13 @@ import platform
 import pstats
 import random
 import struct
-import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import md_table, row, save  # noqa: E402
+from common import md_table, row, save
 
-from hubwire.wire import messages as m  # noqa: E402
-from hubwire.wire.frame import FrameDecoder, encode_frame  # noqa: E402
-from hubwire.wire.values import codec_for  # noqa: E402
+from hubwire.wire import messages as m
+from hubwire.wire.frame import FrameDecoder, encode_frame
+from hubwire.wire.values import codec_for
 
 N_FRAMES = 50_000
 READ = 4096

@@ -6,14 +6,12 @@
 from __future__ import annotations
 
 import os
-import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import md_table, row, save  # noqa: E402
+from common import md_table, row, save
 
-from hubwire.wire import messages as m  # noqa: E402
-from hubwire.wire.frame import encode_frame  # noqa: E402
-from hubwire.wire.values import codec_for  # noqa: E402
+from hubwire.wire import messages as m
+from hubwire.wire.frame import encode_frame
+from hubwire.wire.values import codec_for
 
 IMU = {"t": "struct", "f": [{"n": "ax", "t": "f32"}, {"n": "ay", "t": "f32"}, {"n": "az", "t": "f32"},
                             {"n": "gyro", "t": "i16", "c": 3}]}

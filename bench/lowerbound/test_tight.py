@@ -20,6 +20,7 @@ import pytest
 
 import hubwire
 from hubwire.errors import InvalidValue, NakError
+from hubwire.testing import tap_of, tapped
 from hubwire.wire import messages as m
 from hubwire.wire.frame import decode_frame
 from hubwire.wire.messages import NakCode
@@ -69,7 +70,7 @@ def cache(tmp_path, monkeypatch):
 def start(tmp_path, elf):
     assert os.path.isfile(elf), elf
     sim = Sim(elf, str(tmp_path / "uno"), str(tmp_path / "simuno.log"))
-    dev = hubwire.connect(sim.link)
+    dev = hubwire.connect(transport=tapped(sim.link))
     return sim, dev
 
 
@@ -91,7 +92,7 @@ def tights(tmp_path):
 
 def recorder(dev):
     got = []
-    dev.session.rx_filter = lambda f: (got.append(f), True)[1]
+    tap_of(dev).rx_filter = lambda f: (got.append(f), True)[1]
     return got
 
 
@@ -233,7 +234,7 @@ def test_event_retried_with_same_seq_until_acked(tight):
             return False
         return True
 
-    s.tx_filter = drop_two_event_acks
+    tap_of(s).tx_filter = drop_two_event_acks
     with dev.events("button") as evs:
         sim.press()
         ev = evs.get(3.0)
@@ -243,7 +244,7 @@ def test_event_retried_with_same_seq_until_acked(tight):
     sim.press()
     evframes = [f for f in got if f.type == m.EVENT]
     assert len(evframes) == 3 and len({f.seq for f in evframes}) == 1
-    assert s.stats["duplicate_events"] == 2
+    assert s.stats.duplicate_events == 2
     assert len(dropped) == 2
 
 
@@ -259,14 +260,14 @@ def test_link_loss_relink_and_queued_event(tight):
     time.sleep(1.0)
     assert 3 <= dev.health().device_heartbeats - n0 <= 5  # every 250 ms
     with dev.events("button") as evs:
-        s.tx_paused = True  # the hub goes silent: the device must drop the link after 4 x 250 ms
+        tap_of(s).paused = True  # the hub goes silent: the device must drop the link after 4 x 250 ms
         try:
             assert lost.wait(3.0), "the device never dropped the link"
             sim.press()  # emitted while unlinked: queued
             time.sleep(0.3)
             sim.press()
         finally:
-            s.tx_paused = False
+            tap_of(s).paused = False
         assert restored.wait(5.0)
         ev = evs.get(3.0)
         assert ev is not None and ev.value == 1
@@ -310,11 +311,11 @@ def test_stream_ends_on_link_loss(tights):
     assert any(f.type == m.SAMPLE for f in got)
     lost = threading.Event()
     dev.on("link_lost", lost.set)
-    s.tx_paused = True
+    tap_of(s).paused = True
     try:
         assert lost.wait(3.0)
     finally:
-        s.tx_paused = False
+        tap_of(s).paused = False
     time.sleep(1.5)
     got.clear()
     time.sleep(0.5)

@@ -1,4 +1,8 @@
-"""Hubwire hub: talk to a microcontroller running the Hubwire library over a serial line."""
+"""Hubwire hub: talk to a microcontroller running the Hubwire library over a serial line.
+
+``hubwire.connect(url)`` returns a synchronous :class:`Device`; ``hubwire.aio.connect(url)`` is the
+asyncio flavour. Both run on the same session core (:mod:`hubwire.session`).
+"""
 from __future__ import annotations
 
 from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, NakError, NoDeviceFound,
@@ -13,7 +17,10 @@ __all__ = [
 
 from .descriptor import Channel, Descriptor, parse_descriptor  # noqa: E402
 from .device import Device, EventStream, Stream, connect, find_port  # noqa: E402
-from .session import Event, LinkHealth, Session, State, StreamSample  # noqa: E402
+from .session import LinkHealth, ReceivedEvent, Session, State, Stats, StreamSample  # noqa: E402
+from .transport import SerialTransport, Transport  # noqa: E402
+from . import aio  # noqa: E402
 
-__all__ += ["connect", "find_port", "Device", "Stream", "EventStream", "Session", "State", "Event",
-            "StreamSample", "LinkHealth", "Channel", "Descriptor", "parse_descriptor"]
+__all__ += ["connect", "find_port", "Device", "Stream", "EventStream", "Session", "State", "ReceivedEvent",
+            "StreamSample", "LinkHealth", "Stats", "Channel", "Descriptor", "parse_descriptor", "Transport",
+            "SerialTransport", "aio"]

@@ -10,11 +10,8 @@ from typing import Iterator, Optional
 
 import pytest
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+from hubwire.testing import emulator_binary, tapped
 
-
-def emulator_binary() -> str:
-    return os.environ.get("HUBWIRE_EMULATOR") or os.path.join(REPO, "build", "emulator", "hubwire-emulator")
 
 
 class Emulator:
@@ -108,7 +105,7 @@ def cache_dir(tmp_path) -> str:  # type: ignore[no-untyped-def]
 def rover(emulator: Emulator, cache_dir: str):  # type: ignore[no-untyped-def]
     import hubwire
 
-    dev = hubwire.connect(emulator.link, cache_dir=cache_dir)
+    dev = hubwire.connect(transport=tapped(emulator.link), cache_dir=cache_dir)
     yield dev
     dev.close()
 

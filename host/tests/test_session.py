@@ -61,7 +61,7 @@ def test_lost_chunks_are_asked_again(cache_dir: str) -> None:
     with FakeDevice(drop_chunk=lambda off, nth: nth == 0) as fake:
         with hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
             assert dev.descriptor.raw == DESCRIPTOR
-            stats = dict(dev.session.stats)
+            stats = dev.session.stats.as_dict()
         assert len(fake.chunk_requests) == -(-len(DESCRIPTOR) // 28)
         assert all(n == 2 for n in fake.chunk_requests.values())
     assert stats["retries"] >= len(fake.chunk_requests)
@@ -123,7 +123,7 @@ def test_same_nonce_but_new_descriptor_is_a_reboot(cache_dir: str) -> None:
         fake.reflash(new)
         assert done.wait(5)
         assert "y" in dev and "x" not in dev
-        assert dev.session.stats["reboots"] == 1 and dev.session.stats["downloads"] == 2
+        assert dev.session.stats.reboots == 1 and dev.session.stats.downloads == 2
         dev.y = 7
         assert dev.y == 7
 

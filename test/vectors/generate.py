@@ -19,13 +19,12 @@ import sys
 from typing import Any, Dict, List, Optional, Tuple
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "host"))
 
-from cobs import cobs  # noqa: E402
+from cobs import cobs
 
-from hubwire.wire.frame import FrameDecoder, crc16, encode_frame  # noqa: E402
-from hubwire.wire import messages as m  # noqa: E402
-from hubwire.wire.values import codec_for  # noqa: E402
+from hubwire.wire.frame import FrameDecoder, crc16, encode_frame
+from hubwire.wire import messages as m
+from hubwire.wire.values import codec_for
 
 # ---------------------------------------------------------------------------------------------- CRC
 

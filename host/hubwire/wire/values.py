@@ -17,154 +17,16 @@ NAK code a device would answer (``BAD_LENGTH``, ``BAD_VALUE``, ``OUT_OF_RANGE``)
 from __future__ import annotations
 
 import json
-import math
 import struct
-from operator import itemgetter
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
+from typing import Any, Callable, List, Mapping, Optional, Sequence, Tuple
 
 from ..errors import InvalidValue
-from .messages import NakCode
 
-__all__ = ["SCALARS", "Codec", "StructValue", "codec_for", "type_name"]
+__all__ = ["SCALARS", "Codec", "StructValue", "codec_for", "type_name", "make_struct_class"]
 
-BAD_LENGTH = NakCode.BAD_LENGTH
-BAD_VALUE = NakCode.BAD_VALUE
-OUT_OF_RANGE = NakCode.OUT_OF_RANGE
-
-F32_MAX = 3.4028234663852886e38
-
-# name -> (struct format char, size, lo, hi) ; lo/hi None for floats and bool
-SCALARS: Dict[str, Tuple[str, int, Optional[int], Optional[int]]] = {
-    "bool": ("B", 1, 0, 1),
-    "u8": ("B", 1, 0, 0xFF),
-    "u16": ("H", 2, 0, 0xFFFF),
-    "u32": ("I", 4, 0, 0xFFFFFFFF),
-    "i8": ("b", 1, -0x80, 0x7F),
-    "i16": ("h", 2, -0x8000, 0x7FFF),
-    "i32": ("i", 4, -0x80000000, 0x7FFFFFFF),
-    "f32": ("f", 4, None, None),
-    "f64": ("d", 8, None, None),
-}
-INTEGER_TYPES = frozenset(("u8", "u16", "u32", "i8", "i16", "i32"))
-FLOAT_TYPES = frozenset(("f32", "f64"))
-NUMERIC_TYPES = INTEGER_TYPES | FLOAT_TYPES
-
-
-def _describe(value: Any) -> str:
-    r = repr(value)
-    if len(r) > 40:
-        r = r[:37] + "..."
-    return f"{r} ({type(value).__name__})"
-
-
-def _scalar_checker(t: str, where: str) -> Callable[[Any], Any]:
-    """Return a function normalising one Python value for scalar type ``t`` or raising InvalidValue."""
-    if t == "bool":
-        def check_bool(v: Any) -> bool:
-            if v is True or v is False:
-                return v
-            if isinstance(v, int) and v in (0, 1):
-                return bool(v)
-            raise InvalidValue(f"{where}: expected a bool, got {_describe(v)}", BAD_VALUE)
-        return check_bool
-    if t in INTEGER_TYPES:
-        lo, hi = SCALARS[t][2], SCALARS[t][3]
-
-        def check_int(v: Any) -> int:
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                if hasattr(v, "__index__") and not isinstance(v, bool):
-                    v = v.__index__()
-                else:
-                    raise InvalidValue(f"{where}: expected an integer for {t}, got {_describe(v)}", BAD_VALUE)
-            if isinstance(v, float):
-                if not v.is_integer():
-                    raise InvalidValue(f"{where}: expected an integer for {t}, got {_describe(v)}", BAD_VALUE)
-                v = int(v)
-            if not lo <= v <= hi:  # type: ignore[operator]
-                raise InvalidValue(f"{where}: {v} is outside the {t} range {lo}..{hi}", OUT_OF_RANGE)
-            return v
-        return check_int
-    if t in FLOAT_TYPES:
-        is32 = t == "f32"
-
-        def check_float(v: Any) -> float:
-            if isinstance(v, bool):  # True is an int in Python, but not a number for a speed
-                raise InvalidValue(f"{where}: expected a number for {t}, got {_describe(v)}", BAD_VALUE)
-            if not isinstance(v, (int, float)):
-                try:
-                    v = float(v.__float__())  # numpy scalars, Decimal, Fraction
-                except (AttributeError, TypeError, ValueError, OverflowError):
-                    raise InvalidValue(f"{where}: expected a number for {t}, got {_describe(v)}", BAD_VALUE) from None
-            try:
-                f = float(v)
-            except OverflowError:
-                raise InvalidValue(f"{where}: {v} is too large for {t}", OUT_OF_RANGE) from None
-            if is32 and math.isfinite(f) and abs(f) > F32_MAX:
-                # values that round to FLT_MAX are fine, anything beyond overflows f32
-                try:
-                    struct.pack("<f", f)
-                except OverflowError:
-                    raise InvalidValue(f"{where}: {v} is too large for f32", OUT_OF_RANGE) from None
-            return f
-        return check_float
-    raise ValueError(f"unknown scalar type {t!r}")
-
-
-class StructValue(tuple):
-    """Base of the struct value classes built at runtime: a tuple with named fields.
-
-    ``value.ax``, ``value[0]``, ``value._asdict()``, ``value._replace(ax=1.0)``; fields whose name is a
-    Python keyword are reached with ``getattr(value, "from")`` or ``value["from"]``.
-    """
-
-    __slots__ = ()
-    _fields: Tuple[str, ...] = ()
-
-    def __new__(cls, *args: Any, **kwargs: Any) -> "StructValue":
-        if kwargs:
-            values = list(args) + [None] * (len(cls._fields) - len(args))
-            for k, v in kwargs.items():
-                if k not in cls._fields:
-                    raise TypeError(f"{cls.__name__} has no field {k!r}")
-                values[cls._fields.index(k)] = v
-            args = tuple(values)
-        if len(args) != len(cls._fields):
-            raise TypeError(f"{cls.__name__} takes {len(cls._fields)} values ({', '.join(cls._fields)}), got {len(args)}")
-        return tuple.__new__(cls, args)
-
-    def __getitem__(self, key: Any) -> Any:  # type: ignore[override]
-        if isinstance(key, str):
-            try:
-                return tuple.__getitem__(self, self._fields.index(key))
-            except ValueError:
-                raise KeyError(key) from None
-        return tuple.__getitem__(self, key)
-
-    def _asdict(self) -> Dict[str, Any]:
-        return dict(zip(self._fields, self))
-
-    def _replace(self, **kwargs: Any) -> "StructValue":
-        d = self._asdict()
-        for k in kwargs:
-            if k not in d:
-                raise TypeError(f"{type(self).__name__} has no field {k!r}")
-        d.update(kwargs)
-        return tuple.__new__(type(self), tuple(d[f] for f in self._fields))
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({', '.join(f'{k}={v!r}' for k, v in zip(self._fields, self))})"
-
-    def __getnewargs__(self) -> Tuple[Any, ...]:
-        return tuple(self)
-
-
-def make_struct_class(name: str, fields: Sequence[str]) -> type:
-    """Build a :class:`StructValue` subclass called ``name`` with the given field names."""
-    ns: Dict[str, Any] = {"__slots__": (), "_fields": tuple(fields)}
-    for i, f in enumerate(fields):
-        if f not in ns and not f.startswith("__"):
-            ns[f] = property(itemgetter(i), doc=f"field {f}")
-    return type(name, (StructValue,), ns)
+from .scalars import (BAD_LENGTH, BAD_VALUE, FLOAT_TYPES, INTEGER_TYPES, NUMERIC_TYPES, OUT_OF_RANGE,  # noqa: F401
+                      SCALARS, describe_value, scalar_checker)
+from .structs import StructValue, make_struct_class  # noqa: F401
 
 
 def type_name(obj: Mapping[str, Any]) -> str:
@@ -240,7 +102,7 @@ class ScalarCodec(Codec):
         self.scalar = t
         self.size = self.max_size = size
         self._s = struct.Struct("<" + fmt)
-        self._check = _scalar_checker(t, where)
+        self._check = scalar_checker(t, where)
         self._is_bool = t == "bool"
 
     def encode(self, value: Any) -> bytes:
@@ -288,7 +150,7 @@ class _Flat(Codec):
             fmt += f"{n}{f}"
             size += s * n
             label = where if not fname else f"{where}.{fname}"
-            self._checks.append((pos, count, _scalar_checker(t, label)))
+            self._checks.append((pos, count, scalar_checker(t, label)))
             if t == "bool":
                 self._bool_slots.extend(range(pos, pos + n))
             pos += n
@@ -326,7 +188,7 @@ class ArrayCodec(_Flat):
             if isinstance(value, (bytes, bytearray)) and self.scalar == "u8":
                 pass
             else:
-                raise InvalidValue(f"{self._where}: expected a sequence of {self.count} {self.scalar}, got {_describe(value)}", BAD_VALUE)
+                raise InvalidValue(f"{self._where}: expected a sequence of {self.count} {self.scalar}, got {describe_value(value)}", BAD_VALUE)
         if len(value) != self.count:
             raise InvalidValue(f"{self._where}: expected {self.count} elements for {self.name}, got {len(value)}", BAD_LENGTH)
         return [self._elem(v) for v in value]
@@ -374,7 +236,7 @@ class StructCodec(_Flat):
                 raise InvalidValue(f"{self._where}: expected {len(self.fields)} fields ({', '.join(self.fields)}), got {len(value)}", BAD_LENGTH)
             items = list(value)
         else:
-            raise InvalidValue(f"{self._where}: expected a struct (dict or tuple of {', '.join(self.fields)}), got {_describe(value)}", BAD_VALUE)
+            raise InvalidValue(f"{self._where}: expected a struct (dict or tuple of {', '.join(self.fields)}), got {describe_value(value)}", BAD_VALUE)
         flat: List[Any] = []
         for (pos, count, chk), item, fc in zip(self._checks, items, self.field_codecs):
             if count is None:
@@ -423,7 +285,7 @@ class StrCodec(Codec):
         elif isinstance(value, (bytes, bytearray)):
             data = bytes(value)
         else:
-            raise InvalidValue(f"{self._where}: expected a string, got {_describe(value)}", BAD_VALUE)
+            raise InvalidValue(f"{self._where}: expected a string, got {describe_value(value)}", BAD_VALUE)
         if len(data) > self.capacity:
             raise InvalidValue(f"{self._where}: string of {len(data)} UTF-8 bytes exceeds the capacity of {self.capacity}", BAD_VALUE)
         return bytes((len(data),)) + data
@@ -459,7 +321,7 @@ class VoidCodec(Codec):
 
     def encode(self, value: Any = None) -> bytes:
         if value is not None:
-            raise InvalidValue(f"this takes no value, got {_describe(value)}", BAD_VALUE)
+            raise InvalidValue(f"this takes no value, got {describe_value(value)}", BAD_VALUE)
         return b""
 
     def decode(self, payload: bytes) -> None:

@@ -5,26 +5,19 @@ from __future__ import annotations
 import os
 import select
 import subprocess
-import sys
 import threading
 import time
 import tty
-from typing import Any, Callable, Dict, Iterator, List, Optional
+from typing import Any, Callable, Dict, Iterator, List, Optional, Set
 
 import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-TOOLS = os.path.join(REPO, "tools")
-if TOOLS not in sys.path:
-    sys.path.insert(0, TOOLS)
 
-from faultlink import FaultLink, Faults, stop_process  # noqa: E402
-from hubwire.wire import messages as m  # noqa: E402
-from hubwire.wire.frame import FrameDecoder, encode_frame  # noqa: E402
-
-
-def emulator_binary() -> str:
-    return os.environ.get("HUBWIRE_EMULATOR") or os.path.join(REPO, "build", "emulator", "hubwire-emulator")
+from hubwire.testing import emulator_binary
+from hubwire.testing.faultlink import FaultLink, Faults, FaultyTransport, stop_process
+from hubwire.wire import messages as m
+from hubwire.wire.frame import FrameDecoder, encode_frame
 
 
 class Emu:
@@ -118,6 +111,12 @@ def hubwire_threads() -> List[str]:
     return sorted(t.name for t in threading.enumerate() if t.name.startswith("hubwire"))
 
 
+def hubwire_thread_ids() -> Set[int]:
+    """Identities of the live hubwire threads: compared with an earlier snapshot, the ones a test
+    added (and leaked), not disturbed by another test's thread that ends meanwhile."""
+    return {t.ident for t in threading.enumerate() if t.name.startswith("hubwire") and t.ident is not None}
+
+
 def settle(predicate: Callable[[], bool], timeout: float = 5.0) -> bool:
     end = time.monotonic() + timeout
     while not predicate():
@@ -195,14 +194,17 @@ class HostileDevice:
     def frame(self, t: int, seq: int, cid: int, payload: bytes = b"") -> None:
         self.send(encode_frame(t, seq, cid, payload))
 
-    def flood(self, chunks: Iterator[bytes], seconds: float) -> int:
-        """Write chunks for ``seconds`` (blocking while the hub does not read); returns bytes written."""
-        end = time.monotonic() + seconds
+    def flood(self, chunks: Iterator[bytes], seconds: float, min_bytes: int = 0, max_seconds: float = 0.0) -> int:
+        """Write chunks for ``seconds`` (blocking while the hub does not read), and on until
+        ``min_bytes`` were written or ``max_seconds`` passed (a slow, busy machine); returns bytes written."""
+        start = time.monotonic()
+        end, hard = start + seconds, start + max(seconds, max_seconds)
         total = 0
         for c in chunks:
-            if time.monotonic() >= end:
+            now = time.monotonic()
+            if now >= hard or (now >= end and total >= min_bytes):
                 break
-            self.send(c, deadline=max(0.0, end - time.monotonic()))
+            self.send(c, deadline=max(0.0, hard - now))
             total += len(c)
         return total
 

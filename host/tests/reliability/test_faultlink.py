@@ -118,3 +118,83 @@ def test_device_side_disappears_and_comes_back(tmp_path: Any) -> None:
         p._dev_slave = s2
     finally:
         p.close()
+
+
+# ----------------------------------------------------------------- faultlink as a transport
+
+class TransportPair:
+    """A fake device pty (we hold the master) and a FaultyTransport over its slave, on a private loop."""
+
+    def __init__(self, **kw: Any) -> None:
+        import asyncio
+
+        from hubwire.testing.faultlink import FaultyTransport
+        from hubwire.transport import SerialTransport
+
+        self.master, slave = os.openpty()
+        tty.setraw(slave)
+        self._slave = slave
+        self.loop = asyncio.new_event_loop()
+        self.got = bytearray()
+        self.t = FaultyTransport(SerialTransport(os.ttyname(slave)), **kw)
+        self.t.open(self.loop, self.got.extend, lambda e: None)
+
+    def run(self, seconds: float) -> None:
+        self.loop.run_until_complete(__import__("asyncio").sleep(seconds))
+
+    def write(self, data: bytes) -> None:
+        self.loop.call_soon(self.t.write, data)
+
+    def close(self) -> None:
+        self.t.close()
+        self.loop.close()
+        os.close(self.master)
+        os.close(self._slave)
+
+
+def test_transport_is_transparent_when_clean() -> None:
+    p = TransportPair()
+    try:
+        data = b"".join(frames(100))
+        os.write(p.master, data)
+        p.write(data)
+        p.run(0.3)
+        assert bytes(p.got) == data  # device to hub
+        assert read_all(p.master) == data  # hub to device
+        s = p.t.stats()
+        assert s["h2d"]["frames"] == s["d2h"]["frames"] == 100 and s["faults"] == 0
+    finally:
+        p.close()
+
+
+def test_transport_injects_and_counts_faults() -> None:
+    p = TransportPair(seed=3, both=Faults(drop=0.05, dup=0.05))
+    try:
+        data = b"".join(frames(400))
+        os.write(p.master, data)
+        p.run(0.5)
+        s = p.t.stats()["d2h"]
+        assert s["bytes_dropped"] > 0 and s["frames_duplicated"] > 0
+        assert s["bytes_in"] == len(data) and len(p.got) == s["bytes_out"]
+        decoded = FrameDecoder(255).feed(bytes(p.got))
+        assert 0 < len(decoded) < 400 + s["frames_duplicated"] + 1
+    finally:
+        p.close()
+
+
+def test_transport_stall_holds_bytes_then_delivers_them() -> None:
+    p = TransportPair()
+    try:
+        t0 = time.monotonic()
+        p.t.stall(2000)
+        p.run(0.01)
+        data = b"".join(frames(10))
+        os.write(p.master, data)
+        p.run(0.2)
+        assert bytes(p.got) == b""  # held (the stall has 1.8 s to go)
+        while len(p.got) < len(data) and time.monotonic() - t0 < 10:
+            p.run(0.05)
+        assert time.monotonic() - t0 >= 2.0  # not before the stall ended
+        assert bytes(p.got) == data and p.t.stats()["d2h"]["stalls"] == 1
+    finally:
+        p.close()

@@ -12,7 +12,10 @@ import pytest
 import hubwire
 from hubwire.errors import LinkLost
 
-from .conftest import Emu, FaultLink, tty_fds, hubwire_threads, settle, wait_until
+from hubwire.testing import tap_of, tapped
+from hubwire.transport import SerialTransport
+
+from .conftest import Emu, FaultLink, FaultyTransport, tty_fds, hubwire_thread_ids, hubwire_threads, settle, wait_until
 
 FAIL_FAST = 0.5  # seconds a call may take to raise LinkLost while the link is down
 
@@ -25,20 +28,6 @@ def record_callbacks(dev: Any) -> dict:
     return seen
 
 
-def count_open_attempts(dev: Any) -> List[float]:
-    """Wrap the session's port opener to record when it tries (test instrumentation only)."""
-    s = dev.session
-    attempts: List[float] = []
-    real = s._open_port
-
-    def opener() -> Any:
-        attempts.append(time.monotonic())
-        return real()
-
-    s._open_port = opener
-    return attempts
-
-
 def assert_fails_fast(dev: Any) -> None:
     for op in (lambda: dev.battery, lambda: setattr(dev, "left", 0.1), lambda: dev.selftest(1)):
         t = time.monotonic()
@@ -49,9 +38,9 @@ def assert_fails_fast(dev: Any) -> None:
 
 
 def test_device_dies_and_comes_back_on_the_same_path(emu: Emu) -> None:
-    with hubwire.connect(emu.link, cache_dir=False) as dev:
+    with hubwire.connect(transport=tapped(emu.link), cache_dir=False) as dev:
         seen = record_callbacks(dev)
-        attempts = count_open_attempts(dev)
+        attempts = tap_of(dev).opens  # when the hub tried to open the port
         dev.left = 0.5
         emu.kill()  # the process dies, its pty and link vanish
         wait_until(lambda: dev.state == "lost", 3, "link lost")
@@ -71,7 +60,7 @@ def test_device_dies_and_comes_back_on_the_same_path(emu: Emu) -> None:
         assert 2 <= len(during) <= 15, f"{len(during)} open attempts in 3 s"
         gaps = [b - a for a, b in zip(during, during[1:])]
         assert max(gaps) >= 0.4, f"no backoff: gaps {gaps}"
-        assert dev.session.stats["reboots"] == 1 and dev.session.stats["port_reopens"] >= 1
+        assert dev.session.stats.reboots == 1 and dev.session.stats.port_reopens >= 1
 
 
 def test_proxy_pty_vanishes_while_the_device_keeps_running(emu: Emu, tmp_path: Any) -> None:
@@ -99,11 +88,11 @@ def test_proxy_pty_vanishes_while_the_device_keeps_running(emu: Emu, tmp_path: A
         fl.stop()
 
 
-def test_stall_longer_than_the_loss_timeout(emu: Emu, faultlink: Any) -> None:
+def test_stall_longer_than_the_loss_timeout(emu: Emu) -> None:
     """The line stops for 2.5 s (bytes held, then delivered): both sides declare the link lost,
     calls fail fast meanwhile, then everything recovers by itself."""
-    fl = faultlink()
-    with hubwire.connect(fl.link, cache_dir=False) as dev:
+    fl = FaultyTransport(SerialTransport(emu.link))
+    with hubwire.connect(transport=fl, cache_dir=False) as dev:
         seen = record_callbacks(dev)
         dev.left = 0.5
         fl.stall(2500)
@@ -113,32 +102,32 @@ def test_stall_longer_than_the_loss_timeout(emu: Emu, faultlink: Any) -> None:
         assert settle(lambda: len(seen["link_restored"]) >= 1, 3), seen
         assert dev.battery > 0
         assert dev.failsafes == 1
-        assert dev.session.stats["reboots"] == 0
+        assert dev.session.stats.reboots == 0
         assert fl.stats()["h2d"]["stalls"] == 1
 
 
 def test_repeated_restarts_leak_no_threads_or_fds(emu: Emu) -> None:
     with hubwire.connect(emu.link, cache_dir=False) as dev:
         dev.left = 0.5
-        threads0, fds0 = hubwire_threads(), tty_fds()
+        threads0, fds0 = hubwire_thread_ids(), tty_fds()
         for i in range(3):
             emu.stop()
             wait_until(lambda: dev.state == "lost", 3, "link lost")
             emu.start()
             wait_until(lambda: dev.state == "ready", 10, f"ready again after restart {i}")
             assert dev.battery > 0
-        assert settle(lambda: hubwire_threads() == threads0, 3), (threads0, hubwire_threads())
+        assert settle(lambda: not hubwire_thread_ids() - threads0, 3), hubwire_threads()
         assert tty_fds() == fds0
-        assert dev.session.stats["reboots"] == 3
+        assert dev.session.stats.reboots == 3
 
 
 def test_close_while_the_link_is_down_returns_promptly(emu: Emu) -> None:
-    threads0, fds0 = hubwire_threads(), tty_fds()
+    threads0, fds0 = hubwire_thread_ids(), tty_fds()
     dev = hubwire.connect(emu.link, cache_dir=False)
     emu.stop()
     wait_until(lambda: dev.state == "lost", 3, "link lost")
     t = time.monotonic()
     dev.close()
     assert time.monotonic() - t < 2.5
-    assert settle(lambda: hubwire_threads() == threads0, 3), hubwire_threads()
+    assert settle(lambda: not hubwire_thread_ids() - threads0, 3), hubwire_threads()
     assert tty_fds() == fds0

@@ -1,7 +1,7 @@
-"""Soak through a faulty link (tools/faultlink/soak.py has the scenario and the claims).
+"""Soak through a faulty link (hubwire.testing.faultlink.soak has the scenario and the claims).
 
 Bounded by default (HUBWIRE_SOAK_SECONDS, default 75 s). Long mode: HUBWIRE_SOAK_FRAMES=1000000
-runs until that many frames went through the proxy (also: PYTHONPATH=tools python -m faultlink.soak
+runs until that many frames went through the proxy (also: python -m hubwire.testing.faultlink.soak
 --frames 1000000). The counts are printed and written to build/reliability/soak-last.json.
 """
 from __future__ import annotations
@@ -15,8 +15,10 @@ import pytest
 
 import hubwire
 
-from .conftest import REPO, Faults
-from faultlink.soak import SOAK_FAULTS, check, run_soak
+from hubwire.transport import SerialTransport
+
+from .conftest import REPO, Faults, FaultyTransport
+from hubwire.testing.faultlink.soak import SOAK_FAULTS, check, run_soak
 
 
 def test_soak_exactly_once_no_corruption_no_reset(emulator_bin: str, tmp_path: Any) -> None:
@@ -39,14 +41,15 @@ def test_soak_exactly_once_no_corruption_no_reset(emulator_bin: str, tmp_path: A
     assert r["acked"] > 500 and r["events_delivered"] > 50 and r["reads"] > 50
 
 
-def test_connect_and_discover_through_a_lossy_link(faultlink: Any) -> None:
-    fl = faultlink(seed=5, both=Faults(drop=0.02, ber=1e-4))
+def test_connect_and_discover_through_a_lossy_link(emu: Any) -> None:
+    fl = FaultyTransport(SerialTransport(emu.link), seed=5, both=Faults(drop=0.02, ber=1e-4))
     failures = []
     for _ in range(4):
         t = time.monotonic()
         try:
-            with hubwire.connect(fl.link, cache_dir=False, timeout=15) as dev:
+            with hubwire.connect(transport=fl, cache_dir=False, timeout=15) as dev:
                 assert dev.battery > 0
         except hubwire.HubwireError as e:
             failures.append(f"{type(e).__name__} after {time.monotonic() - t:.1f} s: {e}")
     assert failures == []
+    assert fl.stats()["h2d"]["bytes_dropped"] > 0 and fl.stats()["d2h"]["bits_flipped"] > 0  # it was lossy

@@ -10,7 +10,6 @@ from __future__ import annotations
 import os
 import selectors
 import signal
-import sys
 import subprocess
 import time
 from typing import Any, Callable, Iterator, List, Optional
@@ -18,11 +17,9 @@ from typing import Any, Callable, Iterator, List, Optional
 import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-TOOLS = os.path.join(REPO, "tools")
-if TOOLS not in sys.path:
-    sys.path.insert(0, TOOLS)
 
-from faultlink import stop_process  # noqa: E402
+from hubwire.testing import tapped
+from hubwire.testing.faultlink import stop_process
 BUILD_HINT = "build them with `make simuno uno-firmware`"
 
 #: Like an Uno's bootloader after the DTR reset: the sketch starts ~1 s after the port is opened
@@ -159,7 +156,7 @@ def rover(uno: Simuno) -> Iterator[Any]:
     """The real hub connected to the simulated Rover (default cache: this test's HUBWIRE_CACHE_DIR)."""
     import hubwire
 
-    dev = hubwire.connect(uno.link)
+    dev = hubwire.connect(transport=tapped(uno.link))
     try:
         yield dev
     finally:
@@ -174,6 +171,20 @@ def drain_events(evs: Any, quiet: float = 0.4) -> List[Any]:
         if ev is None:
             return got
         got.append(ev)
+
+
+def take(stream: Any, n: int, deadline: float) -> List[Any]:
+    """``n`` samples (or events) from ``stream``, waiting at most ``deadline`` seconds in all (a
+    simulated Uno on a busy machine runs slower than real time; what counts is what it sends)."""
+    got: List[Any] = []
+    end = time.monotonic() + deadline
+    while len(got) < n:
+        left = end - time.monotonic()
+        x = stream.get(left) if left > 0 else None
+        if x is None:
+            break
+        got.append(x)
+    return got
 
 
 def wait_until(predicate: Callable[[], Any], timeout: float = 5.0, what: str = "condition",
@@ -213,7 +224,7 @@ class Examples:
         sim = Simuno(self.binary, elf, str(self.tmp_path / name), str(self.tmp_path / f"{name}.log"))
         sim.start()
         self.sims[name] = sim
-        dev = hubwire.connect(sim.link)
+        dev = hubwire.connect(transport=tapped(sim.link))
         self.devices.append(dev)
         return dev
 

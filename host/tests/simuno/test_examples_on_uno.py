@@ -10,9 +10,10 @@ import time
 import pytest
 
 from hubwire.errors import InvalidValue, NakError
+from hubwire.testing import tap_of
 from hubwire.wire.messages import NakCode
 
-from .conftest import REPO, Examples, drain_events, wait_until
+from .conftest import REPO, Examples, drain_events, take, wait_until
 
 # What each sketch declares, as the hub shows it: (name, access, type, unit, min, max, failsafe).
 DECLARED = {
@@ -85,11 +86,11 @@ def test_failsafe_stops_the_motor_when_the_hub_goes_silent(examples: Examples) -
         dev.speed = 150
     lost = threading.Event()
     dev.on("link_lost", lost.set)
-    dev.session.tx_paused = True  # the hub goes silent
+    tap_of(dev).paused = True  # the hub goes silent
     try:
         assert lost.wait(3.0), "the device never dropped the link"
     finally:
-        dev.session.tx_paused = False
+        tap_of(dev).paused = False
     wait_until(lambda: dev.state == "ready", 5.0, "the hub to re-link")
     assert dev.speed == 0 and dev.stops == 1
     dev.speed = -30  # the hub drives again
@@ -99,10 +100,11 @@ def test_failsafe_stops_the_motor_when_the_hub_goes_silent(examples: Examples) -
 def test_streaming_sends_samples_at_the_asked_rate(examples: Examples) -> None:
     dev = examples.start("Streaming")
     hz = 20
+    need = int(0.9 * hz * 1.5)  # 1.5 s worth
     with dev.stream("light", hz=hz, meta=True) as light, dev.stream("uptime", hz=hz, meta=True) as up:
         assert light.granted_ms == 50 and up.granted_ms == 50
-        time.sleep(1.5)
-        got = {"light": drain_events(light, 0), "uptime": drain_events(up, 0)}
+        # counted, not timed by the host: 10 x the time they take at the asked rate
+        got = {"light": take(light, need, 15.0), "uptime": take(up, need, 15.0)}
     for name, samples in got.items():
         assert len(samples) >= 0.9 * hz * 1.5 - 2, f"{name}: {len(samples)} samples"
         since = [x.since_ms for x in samples[1:]]

@@ -1,4 +1,4 @@
-"""Command line: ``PYTHONPATH=tools python -m faultlink --device /tmp/rover --link /tmp/rover-faulty ...``
+"""Command line: ``python -m hubwire.testing.faultlink --device /tmp/rover --link /tmp/rover-faulty ...``
 
 Every fault option exists three times: ``--ber`` (both directions), ``--ber-h2d`` (hub to device
 only) and ``--ber-d2h`` (device to hub only). Prints ``READY <link>`` once forwarding, the counters
@@ -8,17 +8,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import signal
 import sys
 import threading
 from dataclasses import replace
 
-if __package__ in (None, ""):  # run as `python tools/faultlink`
-    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    from faultlink import FaultLink, Faults
-else:
-    from . import FaultLink, Faults
+from . import FaultLink, Faults
 
 FIELDS = {
     "ber": (float, "bit-error rate (probability per bit)"),

@@ -1,0 +1,85 @@
+"""Channel operations shared by the synchronous and the asyncio device: checks before sending,
+payloads, decoding answers. Nothing here does I/O."""
+from __future__ import annotations
+
+from typing import Any, Optional
+
+from .descriptor import Channel, Descriptor
+from .errors import HubwireError
+from .wire import messages as m
+from .wire.frame import Frame
+
+__all__ = ["channel", "readable", "write_payload", "call_payload", "call_result", "stream_channel",
+           "interval_for", "event_key"]
+
+
+def channel(desc: Optional[Descriptor], name: str) -> Channel:
+    """The channel called ``name`` (KeyError listing the channels if there is none)."""
+    if desc is None:
+        raise HubwireError("device not discovered yet")
+    ch = desc.by_name(name)
+    if ch is None:
+        raise KeyError(f"{desc.name} has no channel {name!r}; channels: {', '.join(c.name for c in desc.channels)}")
+    return ch
+
+
+def readable(desc: Optional[Descriptor], name: str) -> Channel:
+    ch = channel(desc, name)
+    if not ch.readable:
+        raise HubwireError(f"channel {name!r} is not readable (access {ch.access!r})")
+    return ch
+
+
+def write_payload(desc: Optional[Descriptor], name: str, value: Any) -> "tuple[Channel, bytes]":
+    """Channel and payload of a write, type and range checked (InvalidValue)."""
+    ch = channel(desc, name)
+    if not ch.writable:
+        raise HubwireError(f"channel {name!r} is not writable (access {ch.access!r})")
+    return ch, ch.codec.encode(ch.check(value))
+
+
+def call_payload(desc: Optional[Descriptor], name: str, arg: Any) -> "tuple[Channel, bytes]":
+    """Channel and payload of a call with ``arg`` (None for no argument)."""
+    ch = channel(desc, name)
+    if not ch.callable:
+        raise HubwireError(f"channel {name!r} is not callable (access {ch.access!r})")
+    if ch.codec.kind == "void":
+        if arg is not None:
+            raise HubwireError(f"{name}() takes no argument")
+        return ch, b""
+    if arg is None:
+        raise HubwireError(f"{name}() needs an argument of type {ch.codec.name}")
+    return ch, ch.codec.encode(ch.check(arg))
+
+
+def call_result(ch: Channel, answer: Frame) -> Any:
+    if answer.type == m.ACK:
+        return None
+    assert ch.returns is not None
+    return ch.returns.decode(answer.payload)
+
+
+def stream_channel(desc: Optional[Descriptor], name: str) -> Channel:
+    ch = channel(desc, name)
+    if not ch.streamable:
+        raise HubwireError(f"channel {name!r} is not streamable (access {ch.access!r})")
+    return ch
+
+
+def interval_for(hz: Optional[float], interval_ms: Optional[int]) -> int:
+    """Subscription interval in ms from ``hz`` or ``interval_ms`` (default 10 Hz)."""
+    if interval_ms is None:
+        interval_ms = 100 if hz is None else max(1, int(round(1000.0 / hz)))
+    if not 1 <= interval_ms <= 0xFFFF:
+        raise ValueError("interval must be 1..65535 ms")
+    return interval_ms
+
+
+def event_key(desc: Optional[Descriptor], name: str) -> Optional[str]:
+    """Callback key of ``name``: None for ``"*"`` (every event), else the event channel's name."""
+    if name == "*":
+        return None
+    ch = channel(desc, name)
+    if not ch.is_event:
+        raise HubwireError(f"channel {name!r} is not an event (access {ch.access!r})")
+    return name

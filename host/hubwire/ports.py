@@ -1,0 +1,48 @@
+"""Finding the serial port of the one connected board."""
+from __future__ import annotations
+
+from typing import Any, Dict
+
+from .errors import NoDeviceFound
+
+__all__ = ["find_port", "KNOWN_USB_VIDS"]
+
+#: USB vendor ids of boards and USB-serial bridges commonly used with microcontrollers
+KNOWN_USB_VIDS: Dict[int, str] = {
+    0x2341: "Arduino",
+    0x2A03: "Arduino (.org)",
+    0x1A86: "CH340",
+    0x0403: "FTDI",
+    0x10C4: "CP210x",
+    0x16C0: "Teensy",
+    0x2E8A: "RP2040",
+    0x303A: "Espressif",
+}
+
+
+def _port_line(p: Any) -> str:
+    ids = f"{p.vid:04x}:{p.pid:04x}" if p.vid is not None else "no USB id"
+    desc = p.description if p.description and p.description != "n/a" else ""
+    return f"{p.device} ({ids}{', ' + desc if desc else ''})"
+
+
+def find_port() -> str:
+    """Serial port of the one connected board with a known USB vendor id.
+
+    Raises NoDeviceFound naming the ports seen when none or several match.
+    """
+    from serial.tools import list_ports
+
+    ports = sorted(list_ports.comports(), key=lambda p: p.device)
+    matches = [p for p in ports if p.vid in KNOWN_USB_VIDS]
+    if len(matches) == 1:
+        return matches[0].device
+    seen = "; ".join(_port_line(p) for p in ports) or "none"
+    if not matches:
+        raise NoDeviceFound(
+            "no microcontroller board found: no serial port has a known USB id "
+            f"({', '.join(f'{v:04x} {n}' for v, n in KNOWN_USB_VIDS.items())}). Ports seen: {seen}. "
+            "Pass the port explicitly, e.g. connect('/dev/ttyACM0').")
+    raise NoDeviceFound(
+        f"{len(matches)} boards found, pass the one to use explicitly: "
+        + "; ".join(f"{_port_line(p)} [{KNOWN_USB_VIDS[p.vid]}]" for p in matches))

@@ -1,0 +1,287 @@
+"""The link layer of a session (PROTOCOL.md §4): transport, framing, hello handshake, heartbeats,
+loss detection and re-opening a port that went away.
+
+Everything here runs on the session's event loop and is driven by the transport's callbacks and
+by loop timers: a hello every 100 ms while unlinked, a heartbeat every ``heartbeat_ms`` while
+linked, a loss check due 4 device heartbeat intervals after the last frame heard, and re-opening a
+vanished port with backoff (0.1 s doubling to 2 s). No timer runs for nothing: while linked there
+is no hello timer, while unlinked no heartbeat or loss timer.
+"""
+from __future__ import annotations
+
+import asyncio
+import enum
+import logging
+import os
+import time
+from typing import Any, List, Optional
+
+from ..transport import Transport
+from ..wire import messages as m
+from ..wire.frame import Frame, FrameDecoder, encode_frame
+from .records import Stats
+
+__all__ = ["Link", "HelloOutcome", "HELLO_INTERVAL", "HUB_MAX_PAYLOAD"]
+
+log = logging.getLogger("hubwire")
+
+HELLO_INTERVAL = 0.1
+HUB_MAX_PAYLOAD = 255
+REOPEN_FIRST = 0.1
+REOPEN_MAX = 2.0
+#: the link is lost after this many of the device's heartbeat intervals without a frame
+LOSS_HEARTBEATS = 4
+
+
+def new_nonce() -> int:
+    """A hub session nonce: random per connection, never 0 (os.urandom: distinct across forks)."""
+    return int.from_bytes(os.urandom(4), "little") or 1
+
+
+class HelloOutcome(enum.Enum):
+    """What a device hello meant for the link."""
+
+    FIRST = "first"          # the first hello of this session
+    REBOOT = "reboot"        # a new device session (nonce or descriptor changed)
+    RESTORED = "restored"    # the same device session, after the link was lost
+    ANNOUNCE = "announce"    # an unsolicited hello while linked: the device dropped the link
+    SAME = "same"            # nothing new (a reply to our hello)
+    VERSION = "version"      # a protocol version this hub does not speak
+
+
+class Link:
+    """Transport + framing + handshake + heartbeats of one session; reports to ``owner``.
+
+    ``owner`` provides ``handle(frame, now)`` (every valid frame but hellos and heartbeats),
+    ``on_hello(outcome)``, ``link_down(why)`` and ``port_down()``.
+    """
+
+    def __init__(self, transport: Transport, loop: asyncio.AbstractEventLoop, stats: Stats,
+                 heartbeat_ms: int, owner: Any) -> None:
+        self.transport = transport
+        self.loop = loop
+        self.stats = stats
+        self.heartbeat_ms = heartbeat_ms
+        self.owner = owner
+        self.nonce = new_nonce()
+        self.decoder = FrameDecoder(HUB_MAX_PAYLOAD)
+        self.linked = False
+        self.closed = False
+        self.device_hello: Optional[m.Hello] = None
+        self.peer_hb: Optional[m.Heartbeat] = None
+        self.peer_hb_at: Optional[float] = None
+        self.peer_hb_count = 0
+        self.rejected_version = 0
+        #: device hellos heard (threads waiting for a re-link watch it)
+        self.hello_count = 0
+        self.last_rx = 0.0
+        self._peer_hb_ms = 250
+        self._hb_counter = 0
+        self._last_hb_tx = 0.0
+        self._reopen_delay = REOPEN_FIRST
+        self._hello_waiters: List["asyncio.Future[None]"] = []
+        self._hello_timer: Optional[asyncio.TimerHandle] = None
+        self._hb_timer: Optional[asyncio.TimerHandle] = None
+        self._loss_timer: Optional[asyncio.TimerHandle] = None
+        self._reopen_timer: Optional[asyncio.TimerHandle] = None
+
+    # ---------------------------------------------------------------------------- transport
+
+    def open(self) -> None:
+        """Open the transport (OSError if it cannot be) and start saying hello."""
+        self._open_transport()
+        self._hello_tick()
+
+    def _open_transport(self) -> None:
+        self.transport.open(self.loop, self._on_data, self._on_port_lost)
+
+    def close(self) -> None:
+        self.closed = True
+        self.linked = False
+        for t in (self._hello_timer, self._hb_timer, self._loss_timer, self._reopen_timer):
+            if t is not None:
+                t.cancel()
+        self.transport.close()
+
+    def send(self, data: bytes) -> None:
+        self.transport.write(data)
+
+    def send_frame(self, type: int, seq: int, id: int, payload: bytes = b"") -> None:
+        self.transport.write(encode_frame(type, seq, id, payload))
+
+    def _on_data(self, data: bytes) -> None:
+        frames = self.decoder.feed(data)
+        if not frames:
+            return
+        now = time.monotonic()
+        self.last_rx = now
+        handle = self.owner.handle
+        for f in frames:
+            t = f.type
+            try:
+                if t == m.HEARTBEAT:
+                    self._on_heartbeat(f, now)
+                elif t == m.HELLO:
+                    self._on_hello(f, now)
+                else:
+                    handle(f, now)
+            except Exception:  # noqa: BLE001 - never let one frame stop the link
+                log.exception("hubwire: error handling %r", f)
+
+    def _on_port_lost(self, err: BaseException) -> None:
+        log.info("hubwire: port %s failed: %s", self.transport.url, err)
+        self.decoder.reset()
+        self.owner.port_down()
+        self._reopen_delay = REOPEN_FIRST
+        self._schedule_reopen()
+
+    def _schedule_reopen(self) -> None:
+        if not self.closed:
+            self._reopen_timer = self.loop.call_later(self._reopen_delay, self._try_reopen)
+
+    def _try_reopen(self) -> None:
+        self._reopen_timer = None
+        if self.closed:
+            return
+        try:
+            self._open_transport()
+        except OSError:
+            self._reopen_delay = min(self._reopen_delay * 2, REOPEN_MAX)
+            self._schedule_reopen()
+            return
+        self.stats.port_reopens += 1
+        # A re-opened port is a new connection: a new hub nonce (PROTOCOL.md 4.2). A board that lost
+        # power mixes it into its own nonce, which is how its new boot is told from the old one.
+        self.nonce = new_nonce()
+        self.decoder.reset()
+        self._hello_tick()
+
+    # -------------------------------------------------------------------------------- timers
+
+    def send_hello(self, reply: bool) -> None:
+        h = m.Hello(m.PROTOCOL_VERSION, m.FLAG_REPLY if reply else 0, self.nonce, HUB_MAX_PAYLOAD, self.heartbeat_ms)
+        # a lone 00 first ends whatever noise the device may have collected (an empty frame is
+        # ignored by the receiver, PROTOCOL.md 1), so this hello is not lost with it
+        self.send(b"\x00" + encode_frame(m.HELLO, 0, 0, h.pack()))
+
+    def _hello_tick(self) -> None:
+        """Say hello now and every HELLO_INTERVAL until linked (or the port is gone)."""
+        if self._hello_timer is not None:
+            self._hello_timer.cancel()
+        self._hello_timer = None
+        if self.linked or self.closed or not self.transport.is_open or self.owner.fatal is not None:
+            return
+        self.send_hello(reply=False)
+        self._hello_timer = self.loop.call_later(HELLO_INTERVAL, self._hello_tick)
+
+    def _up(self) -> None:
+        """Linked: heartbeats from now on, and watch for silence."""
+        self.linked = True
+        if self._hello_timer is not None:
+            self._hello_timer.cancel()
+            self._hello_timer = None
+        self._heartbeat_tick()
+        if self._loss_timer is None:
+            self._loss_timer = self.loop.call_later(self._loss_after(), self._loss_check)
+
+    def down(self) -> None:
+        """The link is lost: stop heartbeats, say hello again."""
+        self.linked = False
+        self._hb_counter = 0
+        for t in (self._hb_timer, self._loss_timer):
+            if t is not None:
+                t.cancel()
+        self._hb_timer = self._loss_timer = None
+        self._hello_tick()
+
+    def _loss_after(self) -> float:
+        return LOSS_HEARTBEATS * self._peer_hb_ms / 1000.0
+
+    def _loss_check(self) -> None:
+        self._loss_timer = None
+        if not self.linked or self.closed:
+            return
+        silent = time.monotonic() - self.last_rx
+        limit = self._loss_after()
+        if silent > limit:
+            self.owner.link_down(f"nothing heard for {silent * 1000:.0f} ms")
+            return
+        self._loss_timer = self.loop.call_later(limit - silent + 0.001, self._loss_check)
+
+    def _heartbeat_tick(self) -> None:
+        if self._hb_timer is not None:
+            self._hb_timer.cancel()
+        self._hb_timer = None
+        if not self.linked or self.closed:
+            return
+        now = time.monotonic()
+        since = 0 if self._hb_counter == 0 else int((now - self._last_hb_tx) * 1000)
+        self._hb_counter = (self._hb_counter + 1) & 0xFFFF
+        d = self.decoder
+        hb = m.Heartbeat(self._hb_counter, min(since, 0xFFFF), d.crc, d.overflow, d.dropped)
+        self._last_hb_tx = now
+        self.send_frame(m.HEARTBEAT, self._hb_counter & 0xFF, 0, hb.pack())
+        self._hb_timer = self.loop.call_later(self.heartbeat_ms / 1000.0, self._heartbeat_tick)
+
+    # ------------------------------------------------------------------------------ frames in
+
+    def _on_heartbeat(self, f: Frame, now: float) -> None:
+        try:
+            hb = m.Heartbeat.unpack(f.payload)
+        except m.PayloadError:
+            self.decoder.dropped += 1
+            return
+        self.peer_hb = hb
+        self.peer_hb_at = now
+        self.peer_hb_count += 1
+
+    def _on_hello(self, f: Frame, now: float) -> None:
+        outcome = self._hello_outcome(f)
+        if outcome is not None:
+            self.owner.on_hello(outcome)
+
+    def _hello_outcome(self, f: Frame) -> Optional[HelloOutcome]:
+        try:
+            h = m.Hello.unpack(f.payload)
+        except m.PayloadError:
+            self.decoder.dropped += 1
+            return None
+        if not h.is_device:
+            self.decoder.dropped += 1  # our own hello echoed back (loopback) or another hub
+            return None
+        if h.version != m.PROTOCOL_VERSION:
+            self.rejected_version = h.version
+            return HelloOutcome.VERSION
+        if not h.is_reply:
+            self.send_hello(reply=True)
+        prev, was_linked = self.device_hello, self.linked
+        self.device_hello = h
+        self._peer_hb_ms = h.heartbeat_ms or 250
+        self.hello_count += 1
+        for w in self._hello_waiters:
+            if not w.done():
+                w.set_result(None)
+        self._hello_waiters.clear()
+        if prev is None:
+            self._up()
+            return HelloOutcome.FIRST
+        if prev.nonce != h.nonce or (prev.descriptor_hash, prev.descriptor_length) != (
+                h.descriptor_hash, h.descriptor_length):
+            # the device rebooted: new session on its side (a changed descriptor with an
+            # unchanged nonce means the same: new firmware on a board without nonce entropy)
+            log.info("hubwire: device on %s rebooted (nonce %08x -> %08x)", self.transport.url, prev.nonce, h.nonce)
+            self._up()
+            return HelloOutcome.REBOOT
+        if not was_linked:
+            self._up()
+            return HelloOutcome.RESTORED
+        if not h.is_reply:
+            self._up()
+            return HelloOutcome.ANNOUNCE
+        return HelloOutcome.SAME
+
+    def next_hello(self) -> "asyncio.Future[None]":
+        """A future done at the next device hello."""
+        fut = self.loop.create_future()
+        self._hello_waiters.append(fut)
+        return fut

@@ -1,0 +1,86 @@
+"""Plain records the session hands out: link state, received events, stream samples, health, stats."""
+from __future__ import annotations
+
+import enum
+from dataclasses import asdict, dataclass, field
+from typing import Any, Dict, Optional
+
+__all__ = ["State", "ReceivedEvent", "StreamSample", "LinkHealth", "Stats"]
+
+
+class State(enum.Enum):
+    """Hub link state: ``CONNECTING`` (handshake / discovery), ``READY``, ``LOST``, ``CLOSED``."""
+
+    CONNECTING = "connecting"
+    READY = "ready"
+    LOST = "lost"
+    CLOSED = "closed"
+
+
+@dataclass(frozen=True)
+class ReceivedEvent:
+    """An event received from the device: channel ``name``, decoded ``value``, ``seq`` and arrival
+    ``time`` (``time.monotonic()``)."""
+
+    name: str
+    value: Any
+    seq: int
+    time: float
+    channel_id: int
+
+
+@dataclass(frozen=True)
+class StreamSample:
+    """One streamed sample: ``value``, device-side ``since_ms`` since the previous sample, ``seq``
+    (the subscription's sample counter) and ``lost`` (samples missed before this one, from seq gaps)."""
+
+    value: Any
+    since_ms: int
+    seq: int
+    lost: int
+    time: float
+
+
+@dataclass
+class Stats:
+    """Counters of one session, for diagnostics and tests."""
+
+    chunk_requests: int = 0
+    retries: int = 0
+    events: int = 0
+    duplicate_events: int = 0
+    reboots: int = 0
+    link_lost: int = 0
+    link_restored: int = 0
+    rehandshakes: int = 0
+    port_reopens: int = 0
+    unknown_frames: int = 0
+    unmatched_answers: int = 0
+    cache_hits: int = 0
+    downloads: int = 0
+    samples: int = 0
+    not_linked: int = 0
+    events_deferred: int = 0
+    events_dropped: int = 0
+
+    def as_dict(self) -> Dict[str, int]:
+        """The counters as a plain dict (a snapshot)."""
+        return asdict(self)
+
+
+@dataclass
+class LinkHealth:
+    """Snapshot of the link: state, ages in seconds and the error counters of both receivers.
+
+    ``hub_counters`` are this hub's receiver counters (how well the hub hears the device);
+    ``device_counters`` are the ones the device reported in its last heartbeat (how well it hears us).
+    """
+
+    state: str
+    last_rx_age: Optional[float]
+    heartbeat_age: Optional[float]
+    device_heartbeats: int
+    device_heartbeat_ms: Optional[int]
+    hub_counters: Dict[str, int]
+    device_counters: Dict[str, int]
+    stats: Dict[str, int] = field(default_factory=dict)
