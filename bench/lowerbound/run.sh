@@ -22,4 +22,4 @@ for v in "Tight|extras/bench/lowerbound/Tight|" "TightS|extras/bench/lowerbound/
   read -r f s < <(EXTRA_FLAGS="-I$ROOT/examples/Minimal $flags" size "$dir" "$dest")
   printf '%-32s flash %5d B (+%d)  SRAM %4d B (+%d)\n' "$name" "$f" $((f - bf)) "$s" $((s - bs))
 done
-PYTHONPATH=host .venv/bin/python -m pytest -q bench/lowerbound/test_tight.py
+.venv/bin/python -m pytest -q bench/lowerbound/test_tight.py

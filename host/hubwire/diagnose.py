@@ -8,9 +8,7 @@ Everything here is a function of its arguments, except :func:`port_holders` (rea
 from __future__ import annotations
 
 import errno
-import grp
 import os
-import pwd
 import stat
 from typing import Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
@@ -133,6 +131,8 @@ def open_error_kind(exc: BaseException) -> str:
 
 
 def _group_name(gid: int) -> Optional[str]:
+    import grp  # POSIX only, like the permission problem itself
+
     try:
         return grp.getgrgid(gid).gr_name
     except KeyError:
@@ -150,6 +150,9 @@ def permission_message(url: str) -> str:
     # the port's own group when it is the one that may read and write it (uucp on Arch, ...)
     if st is not None and st.st_gid != 0 and st.st_mode & stat.S_IRGRP and st.st_mode & stat.S_IWGRP:
         group = _group_name(st.st_gid) or group
+    import grp
+    import pwd
+
     try:
         user = pwd.getpwuid(os.getuid()).pw_name
         member = user in grp.getgrnam(group).gr_mem

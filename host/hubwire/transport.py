@@ -21,6 +21,8 @@ from typing import Any, Callable, Dict, Optional
 
 import serial
 
+from .diagnose import open_error
+
 __all__ = ["Transport", "SerialTransport", "DataCallback", "LostCallback"]
 
 DataCallback = Callable[[bytes], None]
@@ -80,12 +82,14 @@ class SerialTransport(Transport):
         return self._port is not None
 
     def open(self, loop: asyncio.AbstractEventLoop, on_data: DataCallback, on_lost: LostCallback) -> None:
-        kw: Dict[str, Any] = {"timeout": 0, "write_timeout": 0}
+        # exclusive: a second program gets a clear "in use by pid N" instead of resetting the board
+        # under the first (pyserial's flock on POSIX; URL handlers ignore it)
+        kw: Dict[str, Any] = {"timeout": 0, "write_timeout": 0, "exclusive": True}
         kw.update(self.serial_kwargs)
         try:
             port = serial.serial_for_url(self.url, baudrate=self.baudrate, **kw)
-        except (serial.SerialException, ValueError) as e:
-            raise OSError(errno.ENODEV, str(e)) from e
+        except (serial.SerialException, OSError, ValueError) as e:
+            raise open_error(self.url, e) from e
         try:
             port.reset_input_buffer()
         except Exception:  # noqa: BLE001 - not every URL handler supports it

@@ -1,4 +1,4 @@
-"""What examples/Rover/Rover.ino declares, as the hub should discover it (emulator and simulated Uno)."""
+"""What examples/Rover declares (its channels.h), as the hub should discover it (emulator and simulated Uno)."""
 
 ROVER = [
     # id, name, access letters, type as the hub names it, unit, min, max, failsafe

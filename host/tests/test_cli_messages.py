@@ -142,17 +142,12 @@ def test_a_silent_port_is_a_connect_timeout(port: Port) -> None:
 
 # These two need the session to build its connect-timeout message with diagnose.no_answer_message
 # (the decoder's counters and noise()); until it does they fail, and strict=True flags the day they pass.
-WIRED = pytest.mark.xfail(strict=True, reason="session._await_connected does not call diagnose.no_answer_message yet")
-
-
-@WIRED
 def test_a_silent_port_says_it_stayed_silent(port: Port) -> None:
     r = run("info", port.path, "--timeout", "1")
     assert r.stderr.startswith(f"hubwire: no Hubwire device answered on {port.path} within 1 s: the port stayed "
                                "silent (nothing arrived; a hello went out every 100 ms)")
 
 
-@WIRED
 def test_a_chattering_port_says_what_it_heard(chatty_port: Port) -> None:
     r = run("info", chatty_port.path, "--timeout", "1")
     head = (f"hubwire: no Hubwire device answered on {chatty_port.path} within 1 s: text arrived, is another "

@@ -15,6 +15,7 @@ from typing import Any, Callable, List, Optional
 
 from ..cache import DescriptorCache
 from ..descriptor import Descriptor
+from ..diagnose import PortOpenError, no_answer_message
 from ..errors import HubwireError, LinkLost, ProtocolVersionError, Timeout
 from ..transport import Transport
 from ..wire import messages as m
@@ -126,6 +127,9 @@ class SessionCore:
         DescriptorError); on failure the session is closed."""
         try:
             self.link.open()
+        except PortOpenError:
+            self.state = State.CLOSED
+            raise
         except OSError as e:
             self.state = State.CLOSED
             raise HubwireError(f"cannot open {self.url}: {e}") from e
@@ -140,11 +144,9 @@ class SessionCore:
         while self.device_hello is None and self.fatal is None:
             left = deadline - time.monotonic()
             if left <= 0:
-                c = self.link.decoder.counters()
-                noise = "" if not any(c.values()) else (
-                    f"; received only noise (dropped {c['dropped']}, crc {c['crc']}, overflow {c['overflow']})")
-                raise Timeout(f"no Hubwire device answered on {self.url} within {self.connect_timeout:g} s"
-                              f" (hello sent every {HELLO_INTERVAL * 1000:.0f} ms){noise}")
+                d = self.link.decoder
+                raise Timeout(no_answer_message(self.url, self.connect_timeout, d.counters(), d.noise(),
+                                                frames=d.frames, hello_ms=round(HELLO_INTERVAL * 1000)))
             await self._changes(left)
         # the handshake is done; discovery may take longer than the deadline as long as it makes
         # progress (a big descriptor on a slow line), but not connect_timeout without any
