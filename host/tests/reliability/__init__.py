@@ -1,1 +1,1 @@
-"""Reliability tests: faulty links (tools/faultlink), soak, hostile input, reconnects (docs/RELIABILITY.md)."""
+"""Reliability tests: faulty links (hubwire.testing.faultlink), soak, hostile input, reconnects (docs/RELIABILITY.md)."""
