@@ -94,8 +94,8 @@ def test_read_every_readable_channel(rover: Any) -> None:
     assert imu._fields == ("ax", "ay", "az", "gyro")
     assert imu.az == pytest.approx(9.81) and imu.gyro == (0, 0, 0)
     rng = rover.range
-    assert len(rng) == 4 and all(100 + 50 * i <= v < 120 + 50 * i for i, v in enumerate(rng))
-    assert 7200 < rover.battery <= 7400
+    assert rng == (150, 150, 150, 150)  # standing still: every obstacle at the sketch's resting distance
+    assert rover.battery == 7400  # no load
     assert rover.led is False
     assert rover["name"] == "rover"
     assert rover.failsafes == 0 and rover.applied == 0
@@ -237,7 +237,7 @@ def test_streams_at_the_requested_rate(rover: Any) -> None:
         span, device_span = got[-1].time - got[0].time, sum(since) / 1000.0
         assert all(b.time >= a.time for a, b in zip(got, got[1:]))
         assert span >= 0.9 * device_span - 2 / hz, f"{name}: {span:.3f} s by arrival time, {device_span:.3f} s sent"
-    assert all(isinstance(x.value, int) and 7200 < x.value <= 7400 for x in samples["battery"])
+    assert all(isinstance(x.value, int) and 7100 <= x.value <= 7400 for x in samples["battery"])  # sags under load
     assert all(x.value.az == pytest.approx(9.81) for x in samples["imu"])
     # unsubscribed: the device stops sending
     n = rover.session.stats.samples
