@@ -27,6 +27,8 @@ from hubwire.wire.frame import FrameDecoder, crc16, encode_frame  # noqa: E402
 from hubwire.wire import messages as m  # noqa: E402
 from hubwire.wire.values import codec_for  # noqa: E402
 
+import session_rules  # noqa: E402  (this folder: session rules, section 8)
+
 # ---------------------------------------------------------------------------------------------- CRC
 
 
@@ -488,6 +490,7 @@ def main() -> int:
         "streams.json": gen_streams(),
         "values.json": values,
         "values_invalid.json": invalid,
+        "session/rules.json": session_rules.gen(),  # a folder of its own: the wire suites load *.json here
     }
     changed = []
     for name, doc in files.items():
