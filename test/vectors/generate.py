@@ -20,6 +20,7 @@ from typing import Any, Dict, List, Optional, Tuple
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "host"))
+sys.path.insert(0, HERE)  # session_rules, also when this file is loaded as a module by path
 
 from cobs import cobs  # noqa: E402
 
