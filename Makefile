@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -85,6 +85,11 @@ soak: setup emulator
 FUZZ_SECONDS ?= 1800
 fuzz-long: setup
 	bash test/fuzz/run.sh --long $(FUZZ_SECONDS)
+
+# The library alone, as users install it: build/dist/Hubwire-<version>.zip for the Arduino IDE's
+# "Add .ZIP Library" and the `pio pkg pack` tarball for PlatformIO (tools/dist.py, offline).
+dist: setup
+	$(PY) tools/dist.py
 
 clean:
 	rm -rf $(BUILD)

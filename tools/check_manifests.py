@@ -9,9 +9,12 @@
    identifiers stands in for it. --online uses the real list.
 2. Our own rules: names, architectures=*, category Communication, includes/headers = Hubwire.h
    (and the header exists), srcDir src, the same version in library.json, library.properties and
-   host/pyproject.toml (if present), export.exclude covering host/test/docs.
+   host/pyproject.toml (if present).
 3. platformio.ini: parsed with configparser (and PlatformIO's ProjectConfig when available); the
    required environments exist and are set up for this library.
+4. What users install (tools/check_package.py): LICENSE, export.include, the tree packed as
+   `pio pkg pack` packs it and the Arduino IDE zip (tools/dist.py) holding only library files,
+   install instructions that name things that exist.
 
 Exit status 0 when everything holds; 1 with one line per problem otherwise.
 """
@@ -26,7 +29,6 @@ import sys
 LIB_NAME = "Hubwire"
 HEADER = "Hubwire.h"
 CATEGORY = "Communication"
-EXPORT_MUST_EXCLUDE = ("host", "test", "docs")
 PROPERTIES_REQUIRED = (
     "name",
     "version",
@@ -188,11 +190,6 @@ def check_library_json(ck):
     build = data.get("build") or {}
     if build.get("srcDir") != "src":
         ck.error(fname, f"build.srcDir must be src, not {build.get('srcDir')!r}")
-    exclude = as_list((data.get("export") or {}).get("exclude"))
-    norm = {e.strip("/").rstrip("/*") for e in exclude}
-    for d in EXPORT_MUST_EXCLUDE:
-        if d not in norm:
-            ck.error(fname, f"export.exclude must list {d}")
     return data
 
 
@@ -355,6 +352,10 @@ def main(argv=None):
                     ck.note(f"{fname}: PlatformIO schema OK ({m.get('name')} {m.get('version')})")
     check_cross(ck, props, data)
     check_platformio_ini(ck)
+    if factory is not None:
+        import check_package  # imports tools/dist.py, which needs PlatformIO's packer
+
+        check_package.check_all(ck, data)
 
     if ck.errors:
         for e in ck.errors:

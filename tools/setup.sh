@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
-# Installs everything the build, the tests and the demo need on Debian / Ubuntu / Raspberry Pi OS:
-# Debian packages (only those missing) and a Python venv in .venv with the hub and test tools.
-# Safe to run again: it does nothing that is already done.
+# Installs everything the build, the tests, the demo and `make dist` need on Debian / Ubuntu /
+# Raspberry Pi OS: Debian packages (only those missing) and a Python venv in .venv with the hub and
+# test tools. Needs only bash and apt-get (a bare system has no make): the README's first command
+# runs it. Safe to run again: it does nothing that is already done.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(
-  make cmake g++ pkg-config git
+  make cmake g++ pkg-config git ca-certificates xxd zip unzip
   googletest libgtest-dev nlohmann-json3-dev           # C++ unit tests
   gcc-avr avr-libc binutils-avr arduino-core-avr arduino-builder arduino-ctags  # Uno/Mega/Leonardo builds
   simavr libsimavr-dev libsimavrparts1 libelf-dev      # the simulated Uno
   gcc-arm-none-eabi libnewlib-arm-none-eabi            # 32-bit (Cortex-M) compile checks
-  python3 python3-venv python3-pip
+  clang libclang-rt-dev                                # libFuzzer + ASan/UBSan (test/fuzz)
+  python3 python3-venv python3-pip python3-dev         # the hub; -dev builds cobs' C extension
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -12,6 +12,7 @@ written below, so a codec bug cannot silently become a "golden" vector.
 from __future__ import annotations
 
 import json
+import importlib.util
 import os
 import random
 import struct
@@ -25,6 +26,18 @@ from cobs import cobs
 from hubwire.wire.frame import FrameDecoder, crc16, encode_frame
 from hubwire.wire import messages as m
 from hubwire.wire.values import codec_for
+
+
+def _sibling(name: str) -> Any:
+    """A module of this folder, also when this file is itself loaded by path (test_properties)."""
+    spec = importlib.util.spec_from_file_location(name, os.path.join(HERE, name + ".py"))
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+session_rules = _sibling("session_rules")  # the session rules of PROTOCOL.md section 8
 
 # ---------------------------------------------------------------------------------------------- CRC
 
@@ -487,6 +500,7 @@ def main() -> int:
         "streams.json": gen_streams(),
         "values.json": values,
         "values_invalid.json": invalid,
+        "session/rules.json": session_rules.gen(),  # a folder of its own: the wire suites load *.json here
     }
     changed = []
     for name, doc in files.items():
