@@ -11,7 +11,7 @@
 
 #include "fakes.h"
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/device.h"
+#include "hubwire/session/session.h"
 
 using namespace hubwire;
 using namespace hubwire::test;
@@ -43,7 +43,7 @@ struct Rig {
   FakeStream stream;
   FakeClock clock;
   Port port{stream, clock};
-  Device device{port};
+  Session device{port};
   Rig() {
     level = 0;
     std::strcpy(name, "");
