@@ -3,7 +3,8 @@
 // A robot must not keep driving when the computer steering it crashes, hangs or is unplugged.
 // Hubwire listens for the hub's heartbeats. After a few missed ones (about 1 s with the default
 // hub) it declares the link lost and then, in this order:
-//   1. sets every channel that declared a failsafe value to that value (speed -> 0 here);
+//   1. sets every channel that declared a failsafe value to that value (speed -> 0 here) and
+//      calls its onChange, as a write from the hub would: driveMotor() stops the motor;
 //   2. calls the function given to onLinkLost(), where you stop what the values alone do not.
 // When a hub talks to the board again, onLinkUp() runs and the hub can drive again.
 //
@@ -20,15 +21,14 @@ const uint8_t kMotorDirPin = 4;  // its direction input
 int16_t speed;   // percent, -100..100, written by the hub
 uint16_t stops;  // how often the failsafe stopped the motor
 
-// Runs after every write from the hub (onChange) and after the failsafe (linkLost).
+// Runs after every write from the hub and after the failsafe (onChange): the pins follow speed.
 void driveMotor() {
   digitalWrite(kMotorDirPin, speed < 0 ? HIGH : LOW);
   analogWrite(kMotorPwmPin, (uint8_t)((uint16_t)abs(speed) * 255 / 100));
 }
 
 void linkLost() {
-  // speed already holds its failsafe value, 0: pass it on to the motor driver.
-  driveMotor();
+  // speed already holds its failsafe value, 0, and driveMotor() has passed it on to the driver.
   ++stops;
   digitalWrite(LED_BUILTIN, LOW);  // the LED shows whether a hub is in charge
 }

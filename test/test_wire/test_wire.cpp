@@ -119,6 +119,13 @@ void checkMessage(const json& m, uint8_t type, const Bytes& p) {
     EXPECT_EQ(u16(8), m["heartbeat_ms"].get<int>());
     EXPECT_EQ(loadU32(&p[10]), m["descriptor_hash"].get<uint32_t>());
     EXPECT_EQ(u16(14), m["descriptor_length"].get<int>());
+    // The descriptor digest: bytes 16..31 when all of them are there, else none.
+    if (m.contains("descriptor_digest")) {
+      ASSERT_GE(p.size(), kHelloDigestEnd);
+      EXPECT_EQ(toHex(&p[kHelloSize], kDigestSize), m["descriptor_digest"].get<std::string>());
+    } else {
+      EXPECT_LT(p.size(), kHelloDigestEnd);
+    }
   } else if (kind == "heartbeat") {
     ASSERT_EQ(type, kMsgHeartbeat);
     ASSERT_EQ(p.size(), kHeartbeatSize);

@@ -11,6 +11,7 @@ written below, so a codec bug cannot silently become a "golden" vector.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import importlib.util
 import os
@@ -153,6 +154,25 @@ def gen_frames() -> Dict[str, Any]:
     add("hello from device (announce, f64)", m.HELLO, 0, 0, dev_ann.pack(),
         {"kind": "hello", "version": 1, "flags": 5, "nonce": 0x00C0FFEE, "max_payload": 64,
          "heartbeat_ms": 100, "descriptor_hash": 0xFFFFFFFF, "descriptor_length": 16384})
+    # Devices that send the descriptor digest (PROTOCOL.md 3.1): bytes 16..31 are the first 16 bytes
+    # of the descriptor's SHA-256; the hash and length are those of the same descriptor.
+    digested = b'{"p":1,"n":"probe","ch":[{"id":1,"n":"duty","a":"rw","t":"i16","fs":0}]}'
+    digest = hashlib.sha256(digested).digest()[:16]
+    assert digest.hex() == "acc899d0357080500194e9d519b66f14"  # test/test_session/test_failsafe_digest.cpp
+    dev_digest = m.Hello(1, m.FLAG_DEVICE | m.FLAG_REPLY, 0x0BADCAFE, 32, 250, m.fnv1a32(digested), len(digested),
+                         digest)
+    add("hello from device (reply, with digest)", m.HELLO, 0, 0, dev_digest.pack(),
+        {"kind": "hello", "version": 1, "flags": 3, "nonce": 0x0BADCAFE, "max_payload": 32,
+         "heartbeat_ms": 250, "descriptor_hash": m.fnv1a32(digested), "descriptor_length": len(digested),
+         "descriptor_digest": digest.hex()})
+    later = m.Hello(1, m.FLAG_DEVICE | m.FLAG_F64, 0x00C0FFEE, 255, 100, m.fnv1a32(digested), len(digested), digest)
+    add("hello from device (announce, with digest and 2 later bytes)", m.HELLO, 0, 0, later.pack() + b"\xa5\x5a",
+        {"kind": "hello", "version": 1, "flags": 5, "nonce": 0x00C0FFEE, "max_payload": 255,
+         "heartbeat_ms": 100, "descriptor_hash": m.fnv1a32(digested), "descriptor_length": len(digested),
+         "descriptor_digest": digest.hex()})
+    add("hello from device, 24 bytes (no digest: it needs all 16)", m.HELLO, 0, 0, dev_hello.pack() + bytes(8),
+        {"kind": "hello", "version": 1, "flags": 3, "nonce": 0xDEADBEEF, "max_payload": 32,
+         "heartbeat_ms": 250, "descriptor_hash": 0x4C0B6B8D, "descriptor_length": 517})
     add("heartbeat, first", m.HEARTBEAT, 0, 0, m.Heartbeat(0, 0, 0, 0, 0).pack(),
         {"kind": "heartbeat", "counter": 0, "since_ms": 0, "crc": 0, "overflow": 0, "dropped": 0})
     add("heartbeat with counters", m.HEARTBEAT, 0x34, 0, m.Heartbeat(0x1234, 251, 3, 1, 65535).pack(),

@@ -4,6 +4,7 @@
  *
  *   simuno FIRMWARE.elf --link PATH [--mcu atmega328p] [--freq 16000000]
  *          [--cycles-log FILE] [--fast] [--boot-delay MS] [--reset-on-open]
+ *          [--watch-pins]
  *
  * Stdout carries exactly one line, "READY PATH", once the simulation runs.
  * Everything libsimavr prints goes to stderr.
@@ -12,7 +13,9 @@
  * an Uno's port); SIGUSR2 presses or releases a button on PD2 (Arduino pin 2),
  * which otherwise reads high, as INPUT_PULLUP makes it on a real board; SIGTERM / SIGINT / SIGHUP stop cleanly (symlink removed,
  * exit status 0). With --reset-on-open, any open() of the pty resets the MCU
- * too (inotify IN_OPEN on the slave device), as a real Uno does.
+ * too (inotify IN_OPEN on the slave device), as a real Uno does. With
+ * --watch-pins, every change of Arduino pins 2..13 as the firmware drives them
+ * goes to stderr as "simuno: pin N = V at cycle C" (what a probe would see).
  *
  * Part of Hubwire. Links against Debian's libsimavr / libsimavrparts.
  */
@@ -86,6 +89,7 @@ static void usage(FILE *f)
 	fprintf(f,
 		"usage: simuno FIRMWARE.elf --link PATH [--mcu atmega328p] [--freq 16000000]\n"
 		"              [--cycles-log FILE] [--fast] [--boot-delay MS] [--reset-on-open]\n"
+		"              [--watch-pins]\n"
 		"  --link PATH        make PATH a symlink to the pty bridged to UART0\n"
 		"  --mcu NAME         simavr core name (default atmega328p)\n"
 		"  --freq HZ          clock frequency (default 16000000)\n"
@@ -95,6 +99,7 @@ static void usage(FILE *f)
 		"                     milliseconds and swallow incoming bytes (bootloader)\n"
 		"  --reset-on-open    reset the MCU whenever a process opens the pty, like\n"
 		"                     the DTR auto-reset of a real Uno\n"
+		"  --watch-pins       log every change of Arduino pins 2..13 to stderr\n"
 		"signals: SIGUSR1 reset the MCU, SIGTERM/SIGINT stop (exit 0)\n");
 }
 
@@ -128,11 +133,38 @@ static void remove_link_if_ours(const char *path)
 	}
 }
 
+/* --watch-pins: one record per Arduino pin 2..13 (PD2..PD7, PB0..PB5). */
+struct watched_pin {
+	avr_t *avr;
+	int number;
+};
+static struct watched_pin watched[12];
+
+static void pin_changed(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+	(void)irq;
+	const struct watched_pin *w = param;
+	fprintf(stderr, "simuno: pin %d = %u at cycle %llu\n", w->number, (unsigned)value,
+		(unsigned long long)w->avr->cycle);
+}
+
+static void watch_pins(avr_t *avr)
+{
+	for (int n = 2; n <= 13; n++) {
+		struct watched_pin *w = &watched[n - 2];
+		w->avr = avr;
+		w->number = n;
+		avr_irq_t *irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(n < 8 ? 'D' : 'B'), n < 8 ? n : n - 8);
+		if (irq)
+			avr_irq_register_notify(irq, pin_changed, w);
+	}
+}
+
 int main(int argc, char **argv)
 {
 	const char *elf = NULL, *mcu = "atmega328p", *log_path = NULL;
 	unsigned long freq = 16000000UL;
-	int fast = 0, reset_on_open = 0;
+	int fast = 0, reset_on_open = 0, watch = 0;
 	long boot_delay_ms = 0;
 
 	for (int i = 1; i < argc; i++) {
@@ -146,6 +178,7 @@ int main(int argc, char **argv)
 		else if (!strcmp(a, "--boot-delay") && more) boot_delay_ms = strtol(argv[++i], NULL, 0);
 		else if (!strcmp(a, "--fast")) fast = 1;
 		else if (!strcmp(a, "--reset-on-open")) reset_on_open = 1;
+		else if (!strcmp(a, "--watch-pins")) watch = 1;
 		else if (a[0] != '-' && !elf) elf = a;
 		else {
 			fprintf(stderr, "simuno: bad argument '%s'\n", a);
@@ -284,6 +317,8 @@ int main(int argc, char **argv)
 
 	/* simavr models no pull-ups: drive PD2 as a pulled-up pin with a button to ground would. */
 	avr_irq_t *button = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2);
+	if (watch)
+		watch_pins(avr);
 	int button_level = -1;
 
 	int64_t base_wall = now_ns();

@@ -91,7 +91,11 @@ _U16 = struct.Struct("<H")
 
 @dataclass(frozen=True)
 class Hello:
-    """Hello payload (§3.1)."""
+    """Hello payload (§3.1).
+
+    ``digest`` is the device's descriptor digest (the first 16 bytes of the descriptor's SHA-256,
+    hello bytes 16..31), or None: a hub's hello, or a device that sends the 16-byte hello.
+    """
 
     version: int
     flags: int
@@ -100,18 +104,31 @@ class Hello:
     heartbeat_ms: int
     descriptor_hash: int = 0
     descriptor_length: int = 0
+    digest: Optional[bytes] = None
 
     SIZE = 16
+    DIGEST_SIZE = 16
+    SIZE_WITH_DIGEST = SIZE + DIGEST_SIZE
+
+    def __post_init__(self) -> None:
+        if self.digest is not None:
+            if not isinstance(self.digest, (bytes, bytearray)) or len(self.digest) != self.DIGEST_SIZE:
+                raise ValueError(f"hello digest must be {self.DIGEST_SIZE} bytes, got {self.digest!r}")
+            object.__setattr__(self, "digest", bytes(self.digest))
 
     def pack(self) -> bytes:
-        return _HELLO.pack(self.version, self.flags, self.nonce, self.max_payload, self.heartbeat_ms,
+        """16 bytes, or 32 with the digest."""
+        head = _HELLO.pack(self.version, self.flags, self.nonce, self.max_payload, self.heartbeat_ms,
                            self.descriptor_hash, self.descriptor_length)
+        return head if self.digest is None else head + self.digest
 
     @classmethod
     def unpack(cls, payload: bytes) -> "Hello":
-        """Decode a hello; trailing bytes after offset 16 are ignored."""
-        _need(payload, 16, "hello", exact=False)
-        return cls(*_HELLO.unpack_from(payload))
+        """Decode a hello: the digest when the payload has 32 bytes or more, None when it has 16..31;
+        bytes after the digest (later additions) are ignored."""
+        _need(payload, cls.SIZE, "hello", exact=False)
+        digest = bytes(payload[cls.SIZE:cls.SIZE_WITH_DIGEST]) if len(payload) >= cls.SIZE_WITH_DIGEST else None
+        return cls(*_HELLO.unpack_from(payload), digest=digest)
 
     @property
     def is_device(self) -> bool:
@@ -256,9 +273,12 @@ def describe(frame: Frame, kind: Optional[str] = None) -> Dict[str, Any]:
     t, p = frame.type, frame.payload
     if t == HELLO:
         h = Hello.unpack(p)
-        return {"kind": "hello", "version": h.version, "flags": h.flags, "nonce": h.nonce,
-                "max_payload": h.max_payload, "heartbeat_ms": h.heartbeat_ms,
-                "descriptor_hash": h.descriptor_hash, "descriptor_length": h.descriptor_length}
+        hello = {"kind": "hello", "version": h.version, "flags": h.flags, "nonce": h.nonce,
+                 "max_payload": h.max_payload, "heartbeat_ms": h.heartbeat_ms,
+                 "descriptor_hash": h.descriptor_hash, "descriptor_length": h.descriptor_length}
+        if h.digest is not None:
+            hello["descriptor_digest"] = h.digest.hex()
+        return hello
     if t == HEARTBEAT:
         hb = Heartbeat.unpack(p)
         return {"kind": "heartbeat", "counter": hb.counter, "since_ms": hb.since_ms, "crc": hb.crc,

@@ -1,5 +1,5 @@
 // The flash tables a declaration list becomes, and their checks: the descriptor JSON as char
-// arrays laid end to end, its hash, one ChannelInfo per channel and the copies it points to (a
+// arrays laid end to end, its hash and digest, one ChannelInfo per channel and the copies it points to (a
 // struct's layout, the function called, range and failsafe values). table() checks what needs the
 // whole list (names unique, texts short, descriptor size) and returns the ChannelTable begin() takes.
 #ifndef HUBWIRE_CHANNELS_TABLES_H
@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "../wire/messages.h"
+#include "../wire/sha256.h"
 #include "channel.h"
 #include "constexpr_text.h"
 #include "dsl.h"
@@ -112,19 +113,29 @@ struct TailPart {
   static constexpr char at(size_t i) { return "]}"[i]; }
 };
 
+// Each part's characters as a constant of its own, worked out once: the JSON in flash copies them
+// and the digest reads them. avr-gcc 5 copies a constant array whole at each read of an element, so
+// the digest reads parts (tens of bytes), never the whole JSON (up to 16 KiB, quadratic).
+template <typename P>
+struct PartConst {
+  static constexpr Chars<P> value = Chars<P>::make();
+};
+template <typename P>
+constexpr Chars<P> PartConst<P>::value;
+
 template <typename D, const D* Decls, typename S>
 struct Channels;
 template <typename D, const D* Decls>
 struct Channels<D, Decls, cx::Seq<> > {
   Chars<TailPart> tail;
-  static constexpr Channels make() { return Channels{Chars<TailPart>::make()}; }
+  static constexpr Channels make() { return Channels{PartConst<TailPart>::value}; }
 };
 template <typename D, const D* Decls, size_t I, size_t... R>
 struct Channels<D, Decls, cx::Seq<I, R...> > {
   Chars<ChannelPart<D, Decls, I> > first;
   Channels<D, Decls, cx::Seq<R...> > rest;
   static constexpr Channels make() {
-    return Channels{Chars<ChannelPart<D, Decls, I> >::make(), Channels<D, Decls, cx::Seq<R...> >::make()};
+    return Channels{PartConst<ChannelPart<D, Decls, I> >::value, Channels<D, Decls, cx::Seq<R...> >::make()};
   }
 };
 template <typename D, const D* Decls>
@@ -132,15 +143,46 @@ struct JsonText {
   Chars<HeadPart<D, Decls> > head;
   Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> body;
 };
+
+// ---- the descriptor as one message for sha256.h: the parts (0 the head, K the channel K-1, then
+// the tail) joined as a balanced tree, so that reading a character goes log2(parts) levels deep ----
+template <typename P>
+struct PartMessage {
+  static constexpr size_t length() { return sizeof(Chars<P>); }
+  static constexpr char at(size_t i) { return PartConst<P>::value.c[i]; }
+};
+template <typename D, const D* Decls, size_t K>
+struct PartAt {
+  typedef ChannelPart<D, Decls, K - 1> Type;
+};
+template <typename D, const D* Decls>
+struct PartAt<D, Decls, 0> {
+  typedef HeadPart<D, Decls> Type;
+};
+template <typename D, const D* Decls, size_t Lo, size_t Hi, bool One = Hi - Lo == 1>
+struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls, (Lo + Hi) / 2, Hi> > {};
+template <typename D, const D* Decls, size_t Lo, size_t Hi>
+struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
+template <typename D, const D* Decls>
+struct DescriptorMessage : sha256::Concat<Parts<D, Decls, 0, D::size() + 1>, PartMessage<TailPart> > {};
+
+// The first kDigestSize bytes of the JSON's SHA-256 and, right after them in flash, the JSON. Hello
+// sends the digest, found at json - kDigestSize: the table copied into RAM does not grow.
+template <typename D, const D* Decls>
+struct JsonAndDigest {
+  sha256::Digest<kDigestSize> digest;
+  JsonText<D, Decls> text;
+};
 // value is constexpr where it is declared (the hash reads it while compiling), so it is a member of
 // a class of its own: a class cannot hold a constexpr object of its own, still incomplete, type.
 template <typename D, const D* Decls>
 struct Json {
-  typedef JsonText<D, Decls> Text;
-  static constexpr Text value = {Chars<HeadPart<D, Decls> >::make(), decltype(Text::body)::make()};
+  typedef JsonAndDigest<D, Decls> Stored;
+  static constexpr Stored value = {sha256::digest<DescriptorMessage<D, Decls>, kDigestSize>(),
+                                   {PartConst<HeadPart<D, Decls> >::value, decltype(JsonText<D, Decls>::body)::make()}};
 };
 template <typename D, const D* Decls>
-constexpr typename Json<D, Decls>::Text Json<D, Decls>::value HUBWIRE_FLASH;
+constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value HUBWIRE_FLASH;
 
 // The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
 // channel, so that the compiler's depth limit is far away.
@@ -263,9 +305,12 @@ constexpr ChannelTable table() {
                 "a name, unit, description, layout or firmware text longer than 255 characters");
   static_assert(namesUnique(Decls->list), "two channels have the same name");
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
-  return ChannelTable{Json<D, Decls>::value.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
-                      hashOf(Json<D, Decls>::value.body,
-                             fnvChars(Json<D, Decls>::value.head.c, sizeof(Json<D, Decls>::value.head.c), kFnvOffset)),
+  static_assert(sizeof(JsonAndDigest<D, Decls>) == sizeof(JsonText<D, Decls>) + kDigestSize,
+                "the JSON follows the digest without a gap");
+  return ChannelTable{Json<D, Decls>::value.text.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
+                      hashOf(Json<D, Decls>::value.text.body,
+                             fnvChars(Json<D, Decls>::value.text.head.c, sizeof(Json<D, Decls>::value.text.head.c),
+                                      kFnvOffset)),
                       Infos<D, Decls>::value,
                       D::size()};
 }

@@ -14,7 +14,7 @@ Session::Session(Port& port)
       port_(port),
       rx_(frameBuf_, sizeof(frameBuf_)),
       tx_(frameBuf_) {
-  peerMax_ = HUBWIRE_MAX_PAYLOAD;
+  peerMax_ = kHelloSize;  // all a hub not yet heard is sure to accept (PROTOCOL.md 3.1)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
 
@@ -51,8 +51,9 @@ bool Session::begin(const ChannelTable& channels, uint32_t seed) {
   return true;
 }
 
-// Variables with a failsafe value take it (every element of an array); a control with one is
-// called with it, as if the hub had sent it.
+// Variables with a failsafe value take it (every element of an array), then their onChange runs,
+// once per link loss whether or not the value changed, as after a hub's write; a control with one
+// is called with it. Either way: as if the hub had sent it.
 void Session::applyFailsafes() {
   for (uint8_t id = 1; id <= table_.count; ++id) {
     ChannelInfo ch;
@@ -64,6 +65,7 @@ void Session::applyFailsafes() {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
       for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &lim.failsafe, size);
+      if (ch.call) functionAt<void (*)()>(ch.call)();
     } else {
       Scalar ignored;
       ch.thunk(ch.call, (const uint8_t*)&lim.failsafe, (uint8_t*)&ignored);
@@ -184,11 +186,13 @@ void Session::onHello(const Frame& f) {
   uint16_t max = loadU16(p + 6);
   uint16_t beat = loadU16(p + 8);
   if (!nonceDrawn_) drawNonce(nonce);
+  bool fromHub = version == kProtocolVersion && !(flags & kHelloDevice);
+  // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap. Known
+  // before the answer, which carries the digest only if this hub accepts it.
+  if (fromHub) peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
   if (!(flags & kHelloReply)) sendHello(true);
-  if (version != kProtocolVersion || (flags & kHelloDevice)) return;  // the hub reports the mismatch
+  if (!fromHub) return;  // the hub reports the mismatch
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
-  // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap.
-  peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
   // Times are 16-bit milliseconds: the timeout must stay below 65.5 s.
   const uint16_t kMaxBeat = 65535u / HUBWIRE_LOST_AFTER_BEATS;
   lostAfterMs_ = (uint16_t)((beat < 10 ? 10 : beat > kMaxBeat ? kMaxBeat : beat) * HUBWIRE_LOST_AFTER_BEATS);
@@ -352,7 +356,10 @@ void Session::sendHello(bool isReply) {
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
   storeU32(p + 10, table_.hash);
   storeU16(p + 14, table_.jsonLength);
-  tx_.send(port_, kMsgHello, 0, 0, kHelloSize);
+  // The descriptor's digest (just before the JSON in flash), sent to a hub that accepts it: one
+  // that accepts only 16 bytes gets the hello it knows.
+  if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd) fromFlash(p + kHelloSize, table_.json - kDigestSize, kDigestSize);
+  tx_.send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
 }
 
 void Session::sendHeartbeat(uint16_t now) {

@@ -115,7 +115,7 @@ class Session : private SessionState {
   ///   session.onLinkUp(showConnected);
   void onLinkUp(void (*fn)()) { onLinkUp_ = fn; }
   /// The failsafe hook: the hub has gone silent (called after channels with failsafe values
-  /// were reset to them).
+  /// were reset to them and their onChange ran).
   ///   session.onLinkLost(stopMotors);
   void onLinkLost(void (*fn)()) { onLinkLost_ = fn; }
 
