@@ -7,8 +7,9 @@ import select
 import threading
 import time
 import tty
-from typing import Callable, Optional
+from typing import Callable, List, Optional, Tuple, Union
 
+from hubwire.cache import descriptor_digest
 from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
 
@@ -19,10 +20,17 @@ DESCRIPTOR = (b'{"p":1,"n":"fake","ch":[{"id":1,"n":"x","a":"rw","t":"u16"},'
 class FakeDevice:
     def __init__(self, descriptor: bytes = DESCRIPTOR, *, version: int = 1, announced_hash: Optional[int] = None,
                  noise: bytes = b"", max_payload: int = 32,
-                 drop_chunk: Optional[Callable[[int, int], bool]] = None) -> None:
+                 drop_chunk: Optional[Callable[[int, int], bool]] = None,
+                 digest: Union[bytes, bool] = True) -> None:
         self.descriptor = descriptor
         self.version = version
         self.hash = m.fnv1a32(descriptor) if announced_hash is None else announced_hash
+        #: the descriptor digest announced in the hello: True its own, False none (an older
+        #: library's 16-byte hello), or any 16 bytes (a lie)
+        self.digest: Optional[bytes] = (descriptor_digest(descriptor) if digest is True
+                                        else None if digest is False else bytes(digest))
+        #: (channel id, value) of every control received, in order
+        self.writes: List[Tuple[int, int]] = []
         self.noise = noise
         self.max_payload = max_payload
         self.drop_chunk = drop_chunk or (lambda offset, nth: False)
@@ -49,13 +57,16 @@ class FakeDevice:
 
     def _hello(self, reply: bool) -> None:
         flags = m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0)
-        h = m.Hello(self.version, flags, 0x1234567, self.max_payload, 250, self.hash, len(self.descriptor))
+        h = m.Hello(self.version, flags, 0x1234567, self.max_payload, 250, self.hash, len(self.descriptor),
+                    digest=self.digest)
         self._send(m.HELLO, 0, 0, h.pack())
 
     def reflash(self, descriptor: bytes) -> None:
         """New firmware, same nonce (a board without nonce entropy): announce it."""
         self.descriptor = descriptor
         self.hash = m.fnv1a32(descriptor)
+        if self.digest is not None:
+            self.digest = descriptor_digest(descriptor)
         self._hello(False)
 
     def _run(self) -> None:
@@ -93,6 +104,7 @@ class FakeDevice:
                         self._send(m.RESPONSE, f.seq, f.id, self.x.to_bytes(2, "little"))
                     elif f.type == m.CONTROL:
                         self.x = int.from_bytes(f.payload, "little")
+                        self.writes.append((f.id, self.x))
                         self._send(m.ACK, f.seq, f.id)
             if linked and time.monotonic() - beat > 0.25:
                 beat = time.monotonic()

@@ -14,8 +14,9 @@ from hubwire.wire.messages import fnv1a32
 OFFSET, PRIME = 0x811C9DC5, 0x01000193
 PRIME_INV = pow(PRIME, -1, 1 << 32)
 MASK = 0xFFFFFFFF
-# characters that need no escaping inside a JSON string
-ALPHABET = bytes(range(ord("0"), ord("0") + 64))
+# 64 characters that need no escaping inside a JSON string
+ALPHABET = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_"
+assert len(ALPHABET) == 64
 
 
 def _forward(h: int, data: bytes) -> int:
@@ -37,11 +38,12 @@ def _triples() -> Iterator[bytes]:
                 yield bytes((a, b, c))
 
 
-def collide(data: bytes, at: int) -> Optional[bytes]:
-    """``data`` with bytes ``at .. at+6`` replaced so that length and FNV-1a hash stay the same, or
-    None when no replacement differs from the original."""
+def collide(data: bytes, at: int, target: Optional[int] = None) -> Optional[bytes]:
+    """``data`` with bytes ``at .. at+6`` replaced so that its FNV-1a hash becomes ``target`` (by
+    default its own) at the same length, or None when no replacement differs from the original."""
+    want = fnv1a32(data) if target is None else target
     before = _forward(OFFSET, data[:at])
-    after = _backward(fnv1a32(data), data[at + 6:])  # the state needed once the six bytes are in
+    after = _backward(want, data[at + 6:])  # the state needed once the six bytes are in
     middle: Dict[int, bytes] = {}
     for t in _triples():
         middle.setdefault(_forward(before, t), t)
@@ -49,15 +51,15 @@ def collide(data: bytes, at: int) -> Optional[bytes]:
         head = middle.get(_backward(after, t))
         if head is not None and head + t != data[at:at + 6]:
             forged = data[:at] + head + t + data[at + 6:]
-            assert len(forged) == len(data) and fnv1a32(forged) == fnv1a32(data)
+            assert len(forged) == len(data) and fnv1a32(forged) == want
             return forged
     return None
 
 
-def collide_in_text(data: bytes, text: bytes) -> Tuple[bytes, int]:
-    """A collision made inside the first occurrence of ``text`` (at least 6 bytes long)."""
+def collide_in_text(data: bytes, text: bytes, target: Optional[int] = None) -> Tuple[bytes, int]:
+    """:func:`collide` inside the first occurrence of ``text`` (at least 6 bytes long)."""
     at = data.index(text)
-    forged = collide(data, at)
+    forged = collide(data, at, target)
     if forged is None:
         raise ValueError("no collision found at that place")
     return forged, at

@@ -7,7 +7,7 @@ import time
 from collections import deque
 from typing import Any, Deque, Dict, Optional
 
-from ..cache import DescriptorCache
+from ..cache import DescriptorCache, descriptor_digest
 from ..descriptor import MAX_DESCRIPTOR_SIZE, Descriptor, parse_descriptor
 from ..errors import DescriptorError, HubwireError, LinkLost, NakError, Timeout
 from ..wire import messages as m
@@ -39,11 +39,14 @@ class Discovery:
                 f"descriptor: the device announces {hello.descriptor_length} bytes, more than the hub's "
                 f"limit of {MAX_DESCRIPTOR_SIZE} bytes (not downloaded)")
         stats = self.core.stats
+        digest = hello.digest
+        # Reuse only what the device's SHA-256 digest vouches for: a device that announces none
+        # (an older library) is always downloaded, never cached (PROTOCOL.md 7.1).
         cur = self.core.descriptor
-        if cur is not None and cur.hash == hello.descriptor_hash and len(cur.raw) == hello.descriptor_length:
+        if digest is not None and cur is not None and descriptor_digest(cur.raw) == digest:
             stats.cache_hits += 1
             return cur
-        cached = self.cache.get(hello.descriptor_hash, hello.descriptor_length)
+        cached = self.cache.get(digest, hello.descriptor_length) if digest is not None else None
         if cached is not None:
             try:
                 d = parse_descriptor(cached)
@@ -54,14 +57,12 @@ class Discovery:
         last: Optional[BaseException] = None
         for _ in range(DOWNLOAD_ATTEMPTS):
             raw = await self.download(hello)
-            h = m.fnv1a32(raw)
-            if h != hello.descriptor_hash:
-                last = DescriptorError(
-                    f"descriptor hash mismatch: device announced {hello.descriptor_hash:08x}, "
-                    f"downloaded {len(raw)} bytes hash to {h:08x}")
+            last = _mismatch(hello, raw)
+            if last is not None:
                 continue
             d = parse_descriptor(raw)
-            self.cache.put(raw)
+            if digest is not None:
+                self.cache.put(digest, raw)
             return d
         assert last is not None
         raise last
@@ -79,6 +80,18 @@ class Discovery:
             return await job.run()
         finally:
             job.forget()
+
+
+def _mismatch(hello: m.Hello, raw: bytes) -> Optional[DescriptorError]:
+    """Why downloaded bytes are not the descriptor ``hello`` announced, or None."""
+    h = m.fnv1a32(raw)
+    if h != hello.descriptor_hash:
+        return DescriptorError(f"descriptor hash mismatch: device announced {hello.descriptor_hash:08x}, "
+                               f"downloaded {len(raw)} bytes hash to {h:08x}")
+    if hello.digest is not None and descriptor_digest(raw) != hello.digest:
+        return DescriptorError(f"descriptor digest mismatch: device announced {hello.digest.hex()}, "
+                               f"downloaded {len(raw)} bytes have SHA-256 {descriptor_digest(raw).hex()}...")
+    return None
 
 
 class _Download:

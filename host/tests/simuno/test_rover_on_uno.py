@@ -5,6 +5,7 @@ delay, see conftest.py), so opening the port resets the board exactly like a rea
 """
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import statistics
@@ -66,7 +67,8 @@ def test_handshake_and_discovery_ride_through_the_uno_boot_delay(uno: Simuno, hu
         stats = dev.session.stats
         assert stats.downloads == 1 and stats.cache_hits == 0
         assert stats.chunk_requests >= math.ceil(len(raw) / (hello.max_payload - 4))
-        assert os.listdir(hub_cache_dir) == [f"{hello.descriptor_hash:08x}-{len(raw)}.json"]
+        assert hello.digest == hashlib.sha256(raw).digest()[:16]  # worked out by the compiler
+        assert os.listdir(hub_cache_dir) == [f"sha256-{hello.digest.hex()}.json"]
         # heartbeats flow and nobody heard garbage (the bootloader swallowed our early hellos)
         wait_until(lambda: dev.health().device_heartbeats >= 2, 2.0, "device heartbeats")
         h = dev.health()
