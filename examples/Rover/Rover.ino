@@ -20,7 +20,11 @@ const uint8_t kLeftMotorPin = 5, kRightMotorPin = 6, kBumperPin = 2, kBuzzerPin 
 // firmware (extras/bench/RxCycles) measures these very channels.
 #include "channels.h"
 
-void countWrite() { ++applied; }
+// onChange also runs when the failsafe sets left and right on link loss, with the link already
+// down: only writes from the hub are counted.
+void countWrite() {
+  if (hub.linked()) ++applied;
+}
 
 void ledChanged() {
   digitalWrite(LED_BUILTIN, led ? HIGH : LOW);
