@@ -63,7 +63,9 @@ def test_lost_chunks_are_asked_again(cache_dir: str) -> None:
             assert dev.descriptor.raw == DESCRIPTOR
             stats = dev.session.stats.as_dict()
         assert len(fake.chunk_requests) == -(-len(DESCRIPTOR) // 28)
-        assert all(n == 2 for n in fake.chunk_requests.values())
+        # each chunk was asked again after its first answer was lost (more often only when a busy
+        # machine delayed an answer past the retry timeout: retries are idempotent)
+        assert all(n >= 2 for n in fake.chunk_requests.values())
     assert stats["retries"] >= len(fake.chunk_requests)
 
 

@@ -253,6 +253,13 @@ class Link:
             self.rejected_version = h.version
             return HelloOutcome.VERSION
         if not h.is_reply:
+            if h.digest is None and h.max_payload >= m.Hello.SIZE_WITH_DIGEST:
+                # It announced itself before it knew we take a hello with the descriptor digest
+                # (after a reset it has not heard us yet): ask for its hello again instead of
+                # answering, so discovery can trust its cache (PROTOCOL.md 7.1). A device that
+                # predates the digest answers without one, and that answer is taken as it is.
+                self.send_hello(reply=False)
+                return None
             self.send_hello(reply=True)
         prev, was_linked = self.device_hello, self.linked
         self.device_hello = h
