@@ -58,15 +58,15 @@ def test_failsafe_reaches_the_pin_through_onchange_after_the_link_is_lost(failsa
     sim = failsafe_uno
     dev = hubwire.connect(sim.link, heartbeat_ms=HUB_HEARTBEAT_MS)
     try:
-        wait_until(lambda: last_level(sim.pin_changes(LED_PIN)) == 1, 5.0, "linkUp() to light the LED")
+        wait_until(lambda: last_level(sim.pin_changes(LED_PIN)) == 1, 15.0, "linkUp() to light the LED")
         dev.speed = -60  # onChange: direction pin HIGH
-        wait_until(lambda: last_level(sim.pin_changes(DIR_PIN)) == 1, 5.0, "the direction pin to go HIGH")
-        wait_until(lambda: len(sim.pin_changes(PWM_PIN)) > 10, 5.0, "the PWM pin to pulse")
+        wait_until(lambda: last_level(sim.pin_changes(DIR_PIN)) == 1, 15.0, "the direction pin to go HIGH")
+        wait_until(lambda: len(sim.pin_changes(PWM_PIN)) > 10, 15.0, "the PWM pin to pulse")
         assert dev.speed == -60
         assert last_level(sim.pin_changes(LED_PIN)) == 1, "the link dropped while the hub was talking"
     finally:
         dev.close()  # the hub goes silent: nothing more is sent
-    wait_until(lambda: last_level(sim.pin_changes(LED_PIN)) == 0, 5.0, "linkLost() to turn the LED off")
+    wait_until(lambda: last_level(sim.pin_changes(LED_PIN)) == 0, 15.0, "linkLost() to turn the LED off")
     time.sleep(0.3)  # the PWM, had it kept running, would pulse hundreds of times meanwhile
 
     dir_changes, led_changes = sim.pin_changes(DIR_PIN), sim.pin_changes(LED_PIN)
