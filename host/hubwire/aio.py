@@ -194,8 +194,10 @@ async def _wait(ready: asyncio.Event, timeout: Optional[float], what: Callable[[
 
 class AsyncStream:
     """A subscription to a streamable channel for ``async for`` (values, or :class:`StreamSample`
-    with ``meta=True``); raises LinkLost when the link drops, Timeout after ``timeout`` s without
-    a sample (when given)."""
+    with ``meta=True``). Rides through link losses and device reboots as :class:`hubwire.Stream`
+    does (the first sample after an outage has ``gap`` >= 1, :attr:`gaps` counts them); raises
+    Timeout after ``timeout`` s without a sample (when given), StreamEnded when a rebooted device
+    no longer has the channel, LinkLost once the session is closed."""
 
     def __init__(self, core: SessionCore, channel: Channel, interval_ms: int, *, meta: bool,
                  timeout: Optional[float], maxlen: int) -> None:
@@ -209,6 +211,8 @@ class AsyncStream:
         self.granted_ms = 0
         #: samples lost (gaps in the device's sample counter)
         self.lost = 0
+        #: link outages ridden through (each reported on the next sample's ``gap``)
+        self.gaps = 0
 
     async def open(self) -> "AsyncStream":
         """Subscribe now (iteration does it on first use)."""
@@ -234,6 +238,7 @@ class AsyncStream:
             await _wait(sub.ready, self.timeout, lambda: f"no sample of {self.channel.name} within {self.timeout:g} s")
         s: StreamSample = sub.queue.popleft()
         self.lost += s.lost
+        self.gaps += s.gap
         return s if self.meta else s.value
 
     async def aclose(self) -> None:
@@ -277,7 +282,8 @@ class _AsyncSink(EventSink):
 
 class AsyncEventStream:
     """``async for ev in dev.events(...)``: incoming :class:`ReceivedEvent` objects from its creation
-    on; ends when the session closes, or after ``timeout`` s without an event (when given)."""
+    on, riding through link losses and device reboots; ends when the session closes, or after
+    ``timeout`` s without an event (when given)."""
 
     def __init__(self, core: SessionCore, names: Optional[frozenset], timeout: Optional[float]) -> None:
         self._core = core
