@@ -28,8 +28,9 @@ from .descriptor import Channel, Descriptor
 from .errors import HubwireError, Timeout
 from .ports import find_port
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
-from .session.events import EVENT_QUEUE_LIMIT, EventSink
+from .session.events import EventSink
 from .session.runner import LoopDispatcher
+from .text import clip
 from .transport import SerialTransport, Transport
 from .wire import messages as m
 
@@ -180,7 +181,7 @@ class AsyncDevice:
 
     def __repr__(self) -> str:
         d = self._core.descriptor
-        what = repr(d.name) if d is not None else ""
+        what = clip(d.name) if d is not None else ""
         return f"<hubwire.aio.AsyncDevice {what} on {self._core.url} ({self._core.state.value})>"
 
 
@@ -270,9 +271,10 @@ class _AsyncSink(EventSink):
         self.ready = asyncio.Event()
 
     def put(self, ev: Optional[ReceivedEvent]) -> None:
-        if len(self.q) >= EVENT_QUEUE_LIMIT:
+        self.note_size(len(self.q))
+        if len(self.q) >= self.limit:
             self.q.popleft()
-            self.core.stats.events_dropped += 1
+            self.note_dropped(self.core.stats)
         self.q.append(ev)
         self.ready.set()
 

@@ -10,6 +10,12 @@ from __future__ import annotations
 import errno
 import os
 import stat
+
+try:  # imported here, not when needed: a process that dropped its privileges may not read them then
+    import grp
+    import pwd
+except ImportError:  # pragma: no cover - Windows has no permission groups to explain
+    grp = pwd = None  # type: ignore[assignment]
 from typing import Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
 from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, NakError, NoDeviceFound,
@@ -131,8 +137,8 @@ def open_error_kind(exc: BaseException) -> str:
 
 
 def _group_name(gid: int) -> Optional[str]:
-    import grp  # POSIX only, like the permission problem itself
-
+    if grp is None:
+        return None
     try:
         return grp.getgrgid(gid).gr_name
     except KeyError:
@@ -150,13 +156,10 @@ def permission_message(url: str) -> str:
     # the port's own group when it is the one that may read and write it (uucp on Arch, ...)
     if st is not None and st.st_gid != 0 and st.st_mode & stat.S_IRGRP and st.st_mode & stat.S_IWGRP:
         group = _group_name(st.st_gid) or group
-    import grp
-    import pwd
-
     try:
         user = pwd.getpwuid(os.getuid()).pw_name
         member = user in grp.getgrnam(group).gr_mem
-    except KeyError:
+    except (KeyError, AttributeError):  # AttributeError: no grp/pwd (Windows)
         member = False
     if member:
         return (f"no permission to open {url}: you were added to the '{group}' group after this login "

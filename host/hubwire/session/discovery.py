@@ -174,8 +174,11 @@ class _Download:
         total = self.total
         if c.total != total:
             raise DescriptorError(f"descriptor length changed: hello said {total}, chunk says {c.total}")
-        if c.offset != off or off + len(c.data) > total:
-            raise DescriptorError(f"descriptor chunk for offset {c.offset} answers offset {off}")
+        if c.offset != off:
+            raise DescriptorError(f"descriptor chunk asked for offset {off} answers offset {c.offset}")
+        if off + len(c.data) > total:
+            raise DescriptorError(f"descriptor chunk at offset {off} with {len(c.data)} bytes runs past "
+                                  f"the end of the {total}-byte descriptor")
         if not c.data:
             raise DescriptorError(f"empty descriptor chunk at offset {off} of {total}")
         for i, b in enumerate(c.data):
