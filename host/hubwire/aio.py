@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import asyncio
 from collections import deque
-from typing import Any, Callable, Deque, Generator, Optional, Tuple
+from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple
 
 from . import ops
 from .descriptor import Channel, Descriptor
@@ -55,7 +55,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 class _Connecting:
     """What :func:`connect` returns: awaitable, and an async context manager."""
 
-    def __init__(self, transport: Transport, timeout: float, kwargs: dict) -> None:
+    def __init__(self, transport: Transport, timeout: float, kwargs: Dict[str, Any]) -> None:
         self._transport = transport
         self._timeout = timeout
         self._kwargs = kwargs
@@ -67,7 +67,8 @@ class _Connecting:
                                 kw.pop("on_reconnect", None))
         core = SessionCore(self._transport, dispatch=LoopDispatcher(asyncio.get_running_loop()),
                            connect_timeout=self._timeout, **kw)
-        for lst, cb in zip((core.link_lost_cbs, core.link_restored_cbs, core.reconnect_cbs), cbs):
+        lists: Tuple[List[Any], ...] = (core.link_lost_cbs, core.link_restored_cbs, core.reconnect_cbs)
+        for lst, cb in zip(lists, cbs):
             if cb is not None:
                 lst.append(cb)
         await core.open()
@@ -264,7 +265,7 @@ class AsyncStream:
 
 
 class _AsyncSink(EventSink):
-    def __init__(self, core: SessionCore, names: Optional[frozenset]) -> None:
+    def __init__(self, core: SessionCore, names: Optional[FrozenSet[str]]) -> None:
         self.names = names
         self.core = core
         self.q: Deque[Optional[ReceivedEvent]] = deque()
@@ -287,7 +288,7 @@ class AsyncEventStream:
     on, riding through link losses and device reboots; ends when the session closes, or after
     ``timeout`` s without an event (when given)."""
 
-    def __init__(self, core: SessionCore, names: Optional[frozenset], timeout: Optional[float]) -> None:
+    def __init__(self, core: SessionCore, names: Optional[FrozenSet[str]], timeout: Optional[float]) -> None:
         self._core = core
         self.timeout = timeout
         self._sink: Optional[_AsyncSink] = _AsyncSink(core, names)

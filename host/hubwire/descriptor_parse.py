@@ -12,7 +12,8 @@ from .errors import DescriptorError, InvalidValue
 from .text import clip, clip_json, clip_list
 from .wire.frame import PROTOCOL_MAX_PAYLOAD
 from .wire.messages import PROTOCOL_VERSION, fnv1a32
-from .wire.values import INTEGER_TYPES, NUMERIC_TYPES, SCALARS, Codec, codec_for
+from .wire.scalars import INTEGER_TYPES, NUMERIC_TYPES
+from .wire.values import SCALARS, Codec, codec_for
 
 __all__ = ["parse_descriptor"]
 
@@ -97,7 +98,7 @@ def _count(where: str, obj: Mapping[str, Any], key: str, maximum: int, what: str
     c = obj[key]
     if not _is_int(c) or not 1 <= c <= maximum:
         raise _fail(where, f"{what} '{key}' must be an integer 1..{maximum}, got {clip_json(c)}")
-    return c
+    return int(c)
 
 
 def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tuple[str, ...]) -> Dict[str, Any]:
@@ -225,7 +226,7 @@ def _range(where: str, ch: Mapping[str, Any], a: str, codec: Codec) -> Tuple[Any
             raise _fail(where, f"'{key}' must be a number, got {clip_json(v)}")
         if codec.scalar in INTEGER_TYPES:
             _, _, tlo, thi = SCALARS[codec.scalar]
-            if not tlo <= v <= thi:  # type: ignore[operator]
+            if not tlo <= v <= thi:
                 raise _fail(where, f"'{key}' {v} is outside the {codec.scalar} range {tlo}..{thi}")
     if lo is not None and hi is not None and lo > hi:
         raise _fail(where, f"'min' {lo} is greater than 'max' {hi}")

@@ -80,6 +80,7 @@ class Device:
     """
 
     __slots__ = ("_session",)
+    _session: Session
 
     def __init__(self, session: Session) -> None:
         object.__setattr__(self, "_session", session)

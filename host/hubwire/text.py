@@ -3,7 +3,7 @@ device may name itself or a channel with 10,000 characters, or with control char
 from __future__ import annotations
 
 import json
-from typing import Any, Iterable
+from typing import Any, Iterable, List
 
 __all__ = ["clip", "show", "clip_json", "clip_list", "CLIP_LIMIT"]
 
@@ -39,7 +39,7 @@ def clip_list(items: Iterable[Any], limit: int = 4 * CLIP_LIMIT) -> str:
     """``a, b, c``: the items (each already bounded by the caller) joined, cut after about ``limit``
     characters with how many were left out."""
     all_ = [str(x) for x in items]
-    out = []
+    out: List[str] = []
     used = 0
     for i, s in enumerate(all_):
         if used + len(s) > limit and out:

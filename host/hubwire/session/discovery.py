@@ -39,7 +39,7 @@ class Discovery:
                 f"descriptor: the device announces {hello.descriptor_length} bytes, more than the hub's "
                 f"limit of {MAX_DESCRIPTOR_SIZE} bytes (not downloaded)")
         stats = self.core.stats
-        cur = self.core.descriptor
+        cur: Optional[Descriptor] = self.core.descriptor
         if cur is not None and cur.hash == hello.descriptor_hash and len(cur.raw) == hello.descriptor_length:
             stats.cache_hits += 1
             return cur
@@ -137,14 +137,16 @@ class _Download:
         retry = self.core.retry_timeout
         now = time.monotonic()
         left = min(p.sent_at + retry - now for p in self.inflight.values())
-        futs = [p.fut for p in self.inflight.values()]
+        futs = [p.fut for p in self.inflight.values() if p.fut is not None]  # coroutine waiters: always set
         if left > 0 and not any(f.done() for f in futs):
             await asyncio.wait(futs, timeout=left, return_when=asyncio.FIRST_COMPLETED)
 
     def _harvest(self, now: float) -> None:
         core = self.core
         for off, p in list(self.inflight.items()):
-            if not p.fut.done():
+            fut = p.fut
+            assert fut is not None  # registered for a coroutine
+            if not fut.done():
                 if now - p.sent_at >= core.retry_timeout:
                     # Chunk requests are idempotent: on a lossy line keep asking for as long as
                     # the download as a whole makes progress (connect_timeout).
@@ -153,7 +155,7 @@ class _Download:
                                       f"{p.tries} tries: no progress for {core.connect_timeout:g} s")
                     core.tx.retry(p)
                 continue
-            a = p.fut.result()  # raises LinkLost and the like
+            a = fut.result()  # raises LinkLost and the like
             if a.type == m.NAK and a.payload[:1] == bytes((NakCode.NOT_LINKED,)):
                 # the device re-links on the hello this NAK triggered: ask again when the retry
                 # timer fires (counts as a try)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 import queue
 from collections import deque
-from typing import Any, Callable, Deque, Dict, List, Optional
+from typing import Any, Callable, Deque, Dict, FrozenSet, List, Optional
 
 from ..errors import InvalidValue
 from ..text import clip
@@ -38,7 +38,7 @@ class EventSink:
     a warning logged when it starts dropping (once, and once more each time it drops again after
     its reader caught up to half the limit)."""
 
-    names: Optional[frozenset] = None
+    names: Optional[FrozenSet[str]] = None
     limit = EVENT_QUEUE_LIMIT
     _dropping = False
 
@@ -65,7 +65,7 @@ class EventSink:
 class QueueSink(EventSink):
     """A thread-safe bounded queue for the synchronous API; ``None`` in it means closed."""
 
-    def __init__(self, stats: Stats, names: Optional[frozenset] = None, limit: int = EVENT_QUEUE_LIMIT) -> None:
+    def __init__(self, stats: Stats, names: Optional[FrozenSet[str]] = None, limit: int = EVENT_QUEUE_LIMIT) -> None:
         self.q: "queue.Queue[Optional[ReceivedEvent]]" = queue.Queue(limit)
         self.stats = stats
         self.names = names
@@ -164,7 +164,7 @@ class Events:
         if sink in self.sinks:
             self.sinks.remove(sink)
 
-    def _take_backlog(self, names: Optional[frozenset]) -> List[ReceivedEvent]:
+    def _take_backlog(self, names: Optional[FrozenSet[str]]) -> List[ReceivedEvent]:
         taken = [ev for ev in self.backlog if names is None or ev.name in names]
         if taken:
             keep = [ev for ev in self.backlog if not (names is None or ev.name in names)]
