@@ -142,7 +142,8 @@ def test_event_iterator_and_callbacks_ride_through_a_reboot(emulator: Any, cache
         assert (before.name, before.value, after.name, after.value) == ("bumper", True, "bumper", True)
         wait_until(lambda: len(called) == 2, BACK, "both callbacks")
         assert called == [True, True]
-        assert dev.session.stats.duplicate_events == 0
+        # delivered once each (an ack late on a busy machine makes the device retry: re-acked, not delivered)
+        assert dev.session.stats.events == 2
 
 
 # ------------------------------------------------------------------- a rebooted device that changed
