@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long dist clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -31,7 +31,7 @@ uno-firmware:
 	done
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-fuzz test-python
+	$(MAKE) test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -65,6 +65,13 @@ test-fuzz:
 
 test-manifests:
 	$(PY) tools/check_manifests.py
+
+# Static checks of the hub: mypy --strict on the package (its settings in host/pyproject.toml) and
+# ruff on host/ and bench/*.py with ruff's classic default rules (pyflakes and the E4/E7/E9 errors),
+# named here so that a newer ruff with a wider default set gives the same verdict.
+test-static:
+	.venv/bin/mypy --config-file host/pyproject.toml host/hubwire
+	.venv/bin/ruff check --isolated --select E4,E7,E9,F host bench/*.py
 
 test-python: emulator simuno uno-firmware
 	$(PY) -m pytest host/tests -q

@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import cProfile
 import io
-import os
 import platform
 import pstats
 import random
@@ -244,7 +243,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=1.0)
     ap.add_argument("--rounds", type=int, default=3)
     a = ap.parse_args()
-    import pymavlink
+    import pymavlink  # noqa: F401 - fails early outside the bench venv
     import pySerialTransfer  # noqa: F401
     from importlib.metadata import version
 

@@ -5,7 +5,6 @@
 """
 from __future__ import annotations
 
-import os
 
 from common import md_table, row, save
 

@@ -6,13 +6,13 @@ asyncio flavour. Both run on the same session core (:mod:`hubwire.session`).
 from __future__ import annotations
 
 from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, NakError, NoDeviceFound,
-                     ProtocolVersionError, Timeout)
+                     ProtocolVersionError, StreamEnded, Timeout)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "HubwireError", "Timeout", "NakError", "DescriptorError", "LinkLost", "ProtocolVersionError",
-    "NoDeviceFound", "InvalidValue", "__version__",
+    "NoDeviceFound", "InvalidValue", "StreamEnded", "__version__",
 ]
 
 from .descriptor import Channel, Descriptor, parse_descriptor  # noqa: E402

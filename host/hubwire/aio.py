@@ -21,15 +21,16 @@ from __future__ import annotations
 
 import asyncio
 from collections import deque
-from typing import Any, Callable, Deque, Generator, Optional, Tuple
+from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple
 
 from . import ops
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, Timeout
 from .ports import find_port
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
-from .session.events import EVENT_QUEUE_LIMIT, EventSink
+from .session.events import EventSink
 from .session.runner import LoopDispatcher
+from .text import clip
 from .transport import SerialTransport, Transport
 from .wire import messages as m
 
@@ -54,7 +55,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 class _Connecting:
     """What :func:`connect` returns: awaitable, and an async context manager."""
 
-    def __init__(self, transport: Transport, timeout: float, kwargs: dict) -> None:
+    def __init__(self, transport: Transport, timeout: float, kwargs: Dict[str, Any]) -> None:
         self._transport = transport
         self._timeout = timeout
         self._kwargs = kwargs
@@ -66,7 +67,8 @@ class _Connecting:
                                 kw.pop("on_reconnect", None))
         core = SessionCore(self._transport, dispatch=LoopDispatcher(asyncio.get_running_loop()),
                            connect_timeout=self._timeout, **kw)
-        for lst, cb in zip((core.link_lost_cbs, core.link_restored_cbs, core.reconnect_cbs), cbs):
+        lists: Tuple[List[Any], ...] = (core.link_lost_cbs, core.link_restored_cbs, core.reconnect_cbs)
+        for lst, cb in zip(lists, cbs):
             if cb is not None:
                 lst.append(cb)
         await core.open()
@@ -180,7 +182,7 @@ class AsyncDevice:
 
     def __repr__(self) -> str:
         d = self._core.descriptor
-        what = repr(d.name) if d is not None else ""
+        what = clip(d.name) if d is not None else ""
         return f"<hubwire.aio.AsyncDevice {what} on {self._core.url} ({self._core.state.value})>"
 
 
@@ -194,8 +196,10 @@ async def _wait(ready: asyncio.Event, timeout: Optional[float], what: Callable[[
 
 class AsyncStream:
     """A subscription to a streamable channel for ``async for`` (values, or :class:`StreamSample`
-    with ``meta=True``); raises LinkLost when the link drops, Timeout after ``timeout`` s without
-    a sample (when given)."""
+    with ``meta=True``). Rides through link losses and device reboots as :class:`hubwire.Stream`
+    does (the first sample after an outage has ``gap`` >= 1, :attr:`gaps` counts them); raises
+    Timeout after ``timeout`` s without a sample (when given), StreamEnded when a rebooted device
+    no longer has the channel, LinkLost once the session is closed."""
 
     def __init__(self, core: SessionCore, channel: Channel, interval_ms: int, *, meta: bool,
                  timeout: Optional[float], maxlen: int) -> None:
@@ -209,6 +213,8 @@ class AsyncStream:
         self.granted_ms = 0
         #: samples lost (gaps in the device's sample counter)
         self.lost = 0
+        #: link outages ridden through (each reported on the next sample's ``gap``)
+        self.gaps = 0
 
     async def open(self) -> "AsyncStream":
         """Subscribe now (iteration does it on first use)."""
@@ -234,6 +240,7 @@ class AsyncStream:
             await _wait(sub.ready, self.timeout, lambda: f"no sample of {self.channel.name} within {self.timeout:g} s")
         s: StreamSample = sub.queue.popleft()
         self.lost += s.lost
+        self.gaps += s.gap
         return s if self.meta else s.value
 
     async def aclose(self) -> None:
@@ -258,16 +265,17 @@ class AsyncStream:
 
 
 class _AsyncSink(EventSink):
-    def __init__(self, core: SessionCore, names: Optional[frozenset]) -> None:
+    def __init__(self, core: SessionCore, names: Optional[FrozenSet[str]]) -> None:
         self.names = names
         self.core = core
         self.q: Deque[Optional[ReceivedEvent]] = deque()
         self.ready = asyncio.Event()
 
     def put(self, ev: Optional[ReceivedEvent]) -> None:
-        if len(self.q) >= EVENT_QUEUE_LIMIT:
+        self.note_size(len(self.q))
+        if len(self.q) >= self.limit:
             self.q.popleft()
-            self.core.stats.events_dropped += 1
+            self.note_dropped(self.core.stats)
         self.q.append(ev)
         self.ready.set()
 
@@ -277,9 +285,10 @@ class _AsyncSink(EventSink):
 
 class AsyncEventStream:
     """``async for ev in dev.events(...)``: incoming :class:`ReceivedEvent` objects from its creation
-    on; ends when the session closes, or after ``timeout`` s without an event (when given)."""
+    on, riding through link losses and device reboots; ends when the session closes, or after
+    ``timeout`` s without an event (when given)."""
 
-    def __init__(self, core: SessionCore, names: Optional[frozenset], timeout: Optional[float]) -> None:
+    def __init__(self, core: SessionCore, names: Optional[FrozenSet[str]], timeout: Optional[float]) -> None:
         self._core = core
         self.timeout = timeout
         self._sink: Optional[_AsyncSink] = _AsyncSink(core, names)

@@ -126,11 +126,13 @@ class Descriptor:
 
     def by_id(self, id: int) -> Optional[Channel]:
         """Channel with this id, or None."""
-        return self._by_id.get(id)  # type: ignore[attr-defined]
+        found: Optional[Channel] = self._by_id.get(id)  # type: ignore[attr-defined]
+        return found
 
     def by_name(self, name: str) -> Optional[Channel]:
         """Channel with this name, or None."""
-        return self._by_name.get(name)  # type: ignore[attr-defined]
+        found: Optional[Channel] = self._by_name.get(name)  # type: ignore[attr-defined]
+        return found
 
     def __iter__(self):  # type: ignore[no-untyped-def]
         return iter(self.channels)

@@ -9,9 +9,11 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 from .descriptor import (ACCESS_LETTERS, CHANNEL_KEYS, FIELD_KEYS, MAX_DEPTH, MAX_DESCRIPTOR_SIZE, NAME_MAX, NAME_RE,
                          TOP_KEYS, Channel, Descriptor)
 from .errors import DescriptorError, InvalidValue
+from .text import clip, clip_json, clip_list
 from .wire.frame import PROTOCOL_MAX_PAYLOAD
 from .wire.messages import PROTOCOL_VERSION, fnv1a32
-from .wire.values import INTEGER_TYPES, NUMERIC_TYPES, SCALARS, Codec, codec_for
+from .wire.scalars import INTEGER_TYPES, NUMERIC_TYPES
+from .wire.values import SCALARS, Codec, codec_for
 
 __all__ = ["parse_descriptor"]
 
@@ -63,10 +65,10 @@ def _reject_constant(name: str) -> Any:
 def _object(where: str, obj: Any, keys: Any, what: str, hint: str = "") -> None:
     """``obj`` must be a JSON object with no key outside ``keys``."""
     if not isinstance(obj, dict):
-        raise _fail(where, f"a {what} must be an object, got {json.dumps(obj)[:40]}")
+        raise _fail(where, f"a {what} must be an object, got {clip_json(obj)}")
     extra = set(obj) - keys
     if extra:
-        raise _fail(where, f"unknown key(s) {', '.join(sorted(map(repr, extra)))}{hint}")
+        raise _fail(where, f"unknown key(s) {clip_list(sorted(map(clip, extra)))}{hint}")
 
 
 def _is_int(v: Any) -> bool:
@@ -82,11 +84,11 @@ def _name(where: str, obj: Mapping[str, Any], what: str) -> str:
         raise _fail(where, f"{what} has no name (key 'n')")
     n = obj["n"]
     if not isinstance(n, str):
-        raise _fail(where, f"{what} name must be a string, got {json.dumps(n)}")
+        raise _fail(where, f"{what} name must be a string, got {clip_json(n)}")
     if len(n) > NAME_MAX:
-        raise _fail(where, f"{what} name {n!r} is longer than {NAME_MAX} characters")
+        raise _fail(where, f"{what} name {clip(n)} is longer than {NAME_MAX} characters")
     if not NAME_RE.match(n):
-        raise _fail(where, f"{what} name {n!r} must match [A-Za-z_][A-Za-z0-9_]*")
+        raise _fail(where, f"{what} name {clip(n)} must match [A-Za-z_][A-Za-z0-9_]*")
     return n
 
 
@@ -95,14 +97,14 @@ def _count(where: str, obj: Mapping[str, Any], key: str, maximum: int, what: str
         return None
     c = obj[key]
     if not _is_int(c) or not 1 <= c <= maximum:
-        raise _fail(where, f"{what} '{key}' must be an integer 1..{maximum}, got {json.dumps(c)}")
-    return c
+        raise _fail(where, f"{what} '{key}' must be an integer 1..{maximum}, got {clip_json(c)}")
+    return int(c)
 
 
 def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tuple[str, ...]) -> Dict[str, Any]:
     """Validate a (t, c) pair; ``allow`` lists the non-scalar type names allowed here."""
     if not isinstance(t, str):
-        raise _fail(where, f"type must be a string, got {json.dumps(t)}")
+        raise _fail(where, f"type must be a string, got {clip_json(t)}")
     if t in SCALARS:
         c = _count(where, c_obj, ckey, PROTOCOL_MAX_PAYLOAD, "array count")
         out: Dict[str, Any] = {"t": t}
@@ -114,8 +116,8 @@ def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tu
     if t not in allow:
         known = ", ".join(list(SCALARS) + list(allow))
         if t in ("str", "struct", "void"):
-            raise _fail(where, f"type {t!r} is not allowed here (allowed: {known})")
-        raise _fail(where, f"unknown type {t!r} (known: {known})")
+            raise _fail(where, f"type {clip(t)} is not allowed here (allowed: {known})")
+        raise _fail(where, f"unknown type {clip(t)} (known: {known})")
     if t == "str":
         if ckey not in c_obj:
             raise _fail(where, f"type 'str' needs a capacity '{ckey}'")
@@ -125,7 +127,7 @@ def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tu
         if ckey in c_obj:
             raise _fail(where, f"type 'void' takes no count '{ckey}'")
         return {"t": "void"}
-    raise _fail(where, f"type {t!r} is not allowed here")  # struct handled by caller
+    raise _fail(where, f"type {clip(t)} is not allowed here")  # struct handled by caller
 
 
 def _fields(where: str, ch: Mapping[str, Any]) -> List[Dict[str, Any]]:
@@ -143,9 +145,9 @@ def _fields(where: str, ch: Mapping[str, Any]) -> List[Dict[str, Any]]:
         fw = f"{where}.f[{i}]"
         _object(fw, f, FIELD_KEYS, "field", " (allowed: n, t, c)")
         n = _name(fw, f, "field")
-        fw = f"{where}.f[{i}] ({n!r})"
+        fw = f"{where}.f[{i}] ({clip(n)})"
         if n in names:
-            raise _fail(fw, f"duplicate field name {n!r}")
+            raise _fail(fw, f"duplicate field name {clip(n)}")
         names.add(n)
         if "t" not in f:
             raise _fail(fw, "field has no type 't'")
@@ -160,18 +162,18 @@ def _fields(where: str, ch: Mapping[str, Any]) -> List[Dict[str, Any]]:
 def _access(where: str, ch: Mapping[str, Any]) -> str:
     a = ch.get("a")
     if not isinstance(a, str) or not a:
-        raise _fail(where, f"access 'a' must be a non-empty string of {ACCESS_LETTERS}, got {json.dumps(a)}")
+        raise _fail(where, f"access 'a' must be a non-empty string of {ACCESS_LETTERS}, got {clip_json(a)}")
     bad = [x for x in a if x not in ACCESS_LETTERS]
     if bad:
-        raise _fail(where, f"unknown access letter(s) {''.join(bad)!r} in {a!r} (r readable, w writable, c callable, e event, s streamable)")
+        raise _fail(where, f"unknown access letter(s) {clip(''.join(bad))} in {clip(a)} (r readable, w writable, c callable, e event, s streamable)")
     if len(set(a)) != len(a):
-        raise _fail(where, f"repeated access letter in {a!r}")
+        raise _fail(where, f"repeated access letter in {clip(a)}")
     if "s" in a and "r" not in a:
-        raise _fail(where, f"access {a!r}: streamable 's' requires readable 'r'")
+        raise _fail(where, f"access {clip(a)}: streamable 's' requires readable 'r'")
     if "w" in a and "c" in a:
-        raise _fail(where, f"access {a!r}: writable 'w' and callable 'c' exclude each other")
+        raise _fail(where, f"access {clip(a)}: writable 'w' and callable 'c' exclude each other")
     if "e" in a and a != "e":
-        raise _fail(where, f"access {a!r}: event 'e' stands alone")
+        raise _fail(where, f"access {clip(a)}: event 'e' stands alone")
     return a
 
 
@@ -207,7 +209,7 @@ def _channel_type(where: str, ch: Mapping[str, Any], name: str, a: str) -> Tuple
 def _text(where: str, ch: Mapping[str, Any], key: str, what: str) -> Optional[str]:
     v = ch.get(key)
     if v is not None and not isinstance(v, str):
-        raise _fail(where, f"{what} '{key}' must be a string, got {json.dumps(v)}")
+        raise _fail(where, f"{what} '{key}' must be a string, got {clip_json(v)}")
     return v
 
 
@@ -221,10 +223,10 @@ def _range(where: str, ch: Mapping[str, Any], a: str, codec: Codec) -> Tuple[Any
         if v is None:
             continue
         if not _is_num(v):
-            raise _fail(where, f"'{key}' must be a number, got {json.dumps(v)}")
+            raise _fail(where, f"'{key}' must be a number, got {clip_json(v)}")
         if codec.scalar in INTEGER_TYPES:
             _, _, tlo, thi = SCALARS[codec.scalar]
-            if not tlo <= v <= thi:  # type: ignore[operator]
+            if not tlo <= v <= thi:
                 raise _fail(where, f"'{key}' {v} is outside the {codec.scalar} range {tlo}..{thi}")
     if lo is not None and hi is not None and lo > hi:
         raise _fail(where, f"'min' {lo} is greater than 'max' {hi}")
@@ -247,19 +249,19 @@ def _failsafe(where: str, ch: Mapping[str, Any], a: str, codec: Codec, type_obj:
                 value = {f["n"]: ([value] * f["c"] if "c" in f else value) for f in type_obj["f"]}
         return codec.check(codec.from_json(value))
     except (InvalidValue, TypeError) as e:
-        raise _fail(where, f"failsafe 'fs' {json.dumps(raw_fs)[:40]} does not fit {codec.name}: {e}") from None
+        raise _fail(where, f"failsafe 'fs' {clip_json(raw_fs)} does not fit {codec.name}: {e}") from None
 
 
 def _parse_channel(i: int, ch: Any) -> Channel:
     where = f"ch[{i}]"
     _object(where, ch, CHANNEL_KEYS, "channel")
     name = _name(where, ch, "channel")
-    where = f"ch[{i}] ({name!r})"
+    where = f"ch[{i}] ({clip(name)})"
     if "id" not in ch:
         raise _fail(where, "channel has no 'id'")
     cid = ch["id"]
     if not _is_int(cid) or not 1 <= cid <= 255:
-        raise _fail(where, f"'id' must be an integer 1..255, got {json.dumps(cid)}")
+        raise _fail(where, f"'id' must be an integer 1..255, got {clip_json(cid)}")
     a = _access(where, ch)
     type_obj, codec, returns = _channel_type(where, ch, name, a)
     unit = _text(where, ch, "u", "unit")
@@ -293,37 +295,37 @@ def parse_descriptor(data: Union[bytes, bytearray, str]) -> Descriptor:
     try:
         doc = json.loads(text, object_pairs_hook=_no_duplicates, parse_constant=_reject_constant)
     except _DuplicateKey as e:
-        raise _fail("", f"duplicate key {e.args[0]!r} in an object") from None
+        raise _fail("", f"duplicate key {clip(e.args[0])} in an object") from None
     except (ValueError, RecursionError) as e:
         raise _fail("", f"is not valid JSON ({e})") from None
     if not isinstance(doc, dict):
         raise _fail("", f"must be a JSON object, got {type(doc).__name__}")
     extra = set(doc) - TOP_KEYS
     if extra:
-        raise _fail("", f"unknown top-level key(s) {', '.join(sorted(map(repr, extra)))} (allowed: p, n, fw, ch)")
+        raise _fail("", f"unknown top-level key(s) {clip_list(sorted(map(clip, extra)))} (allowed: p, n, fw, ch)")
     p = doc.get("p")
     if not _is_int(p):
-        raise _fail("", f"protocol version 'p' must be an integer, got {json.dumps(p)}")
+        raise _fail("", f"protocol version 'p' must be an integer, got {clip_json(p)}")
     if p != PROTOCOL_VERSION:
         raise _fail("", f"protocol version 'p' is {p}, this hub reads version {PROTOCOL_VERSION}")
     name = doc.get("n")
     if not isinstance(name, str):
-        raise _fail("", f"device name 'n' must be a string, got {json.dumps(name)[:70]}")
+        raise _fail("", f"device name 'n' must be a string, got {clip_json(name)}")
     fw = doc.get("fw")
     if fw is not None and not isinstance(fw, str):
-        raise _fail("", f"firmware version 'fw' must be a string, got {json.dumps(fw)}")
+        raise _fail("", f"firmware version 'fw' must be a string, got {clip_json(fw)}")
     chs = doc.get("ch")
     if not isinstance(chs, list):
-        raise _fail("", f"channels 'ch' must be a list, got {json.dumps(chs)[:40]}")
+        raise _fail("", f"channels 'ch' must be a list, got {clip_json(chs)}")
     channels: List[Channel] = []
     ids: Dict[int, str] = {}
     names: Dict[str, int] = {}
     for i, ch in enumerate(chs):
         c = _parse_channel(i, ch)
         if c.id in ids:
-            raise _fail(f"ch[{i}] ({c.name!r})", f"duplicate channel id {c.id} (also used by {ids[c.id]!r})")
+            raise _fail(f"ch[{i}] ({clip(c.name)})", f"duplicate channel id {c.id} (also used by {clip(ids[c.id])})")
         if c.name in names:
-            raise _fail(f"ch[{i}]", f"duplicate channel name {c.name!r} (ids {names[c.name]} and {c.id})")
+            raise _fail(f"ch[{i}]", f"duplicate channel name {clip(c.name)} (ids {names[c.name]} and {c.id})")
         ids[c.id] = c.name
         names[c.name] = c.id
         channels.append(c)

@@ -9,6 +9,7 @@ from .errors import HubwireError
 from .iterators import EventStream, Stream
 from .ports import KNOWN_USB_VIDS, find_port
 from .session import LinkHealth, Session
+from .text import clip, clip_list, show
 from .transport import Transport
 
 __all__ = ["Device", "Stream", "EventStream", "connect", "find_port", "KNOWN_USB_VIDS", "channel_table"]
@@ -79,6 +80,7 @@ class Device:
     """
 
     __slots__ = ("_session",)
+    _session: Session
 
     def __init__(self, session: Session) -> None:
         object.__setattr__(self, "_session", session)
@@ -205,8 +207,8 @@ class Device:
         if ch is None:
             if name.startswith("__"):
                 raise AttributeError(name)
-            raise AttributeError(f"device {d.name + ' ' if d else ''}has no channel {name!r}"
-                                 + (f"; channels: {', '.join(c.name for c in d.channels)}" if d else ""))
+            raise AttributeError(f"device {show(d.name) + ' ' if d else ''}has no channel {name!r}"
+                                 + (f"; channels: {clip_list(c.name for c in d.channels)}" if d else ""))
         if ch.callable:
             return self._bound_call(ch)
         if ch.readable:
@@ -223,7 +225,7 @@ class Device:
         if d is not None and d.by_name(name) is not None:
             self.write(name, value)
             return
-        raise AttributeError(f"{name!r} is not a channel of {d.name if d else 'this device'}")
+        raise AttributeError(f"{name!r} is not a channel of {show(d.name) if d else 'this device'}")
 
     def __delattr__(self, name: str) -> None:
         raise AttributeError(f"cannot delete {name!r} from a device")
@@ -247,8 +249,8 @@ class Device:
         d = s.descriptor
         if d is None:
             return f"<hubwire.Device on {s.url} ({s.state.value})>"
-        fw = f" fw {d.firmware}" if d.firmware else ""
-        return f"<hubwire.Device {d.name!r}{fw} on {s.url} ({s.state.value}), {len(d.channels)} channels>"
+        fw = f" fw {show(d.firmware)}" if d.firmware else ""
+        return f"<hubwire.Device {clip(d.name)}{fw} on {s.url} ({s.state.value}), {len(d.channels)} channels>"
 
     # ------------------------------------------------------------------------ lifecycle
 

@@ -11,10 +11,10 @@ import errno
 import os
 import stat
 
-try:  # POSIX only, like the permission problem itself
+try:  # imported here, not when needed: a process that dropped its privileges may not read them then
     import grp
     import pwd
-except ImportError:  # pragma: no cover - Windows
+except ImportError:  # pragma: no cover - Windows has no permission groups to explain
     grp = pwd = None  # type: ignore[assignment]
 from typing import Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
@@ -137,7 +137,7 @@ def open_error_kind(exc: BaseException) -> str:
 
 
 def _group_name(gid: int) -> Optional[str]:
-    if grp is None:  # pragma: no cover - Windows
+    if grp is None:
         return None
     try:
         return grp.getgrgid(gid).gr_name
@@ -159,7 +159,7 @@ def permission_message(url: str) -> str:
     try:
         user = pwd.getpwuid(os.getuid()).pw_name
         member = user in grp.getgrnam(group).gr_mem
-    except KeyError:
+    except (KeyError, AttributeError):  # AttributeError: no grp/pwd (Windows)
         member = False
     if member:
         return (f"no permission to open {url}: you were added to the '{group}' group after this login "

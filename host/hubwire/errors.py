@@ -16,6 +16,11 @@ class LinkLost(HubwireError, ConnectionError):
     """The link to the device is down; calls fail fast until it is restored."""
 
 
+class StreamEnded(HubwireError):
+    """A stream could not go on after the link came back: the rebooted device no longer has its
+    channel (or not streamable, or of another type), or refused to subscribe it again."""
+
+
 class ProtocolVersionError(HubwireError):
     """The device speaks a protocol version this hub does not."""
 

@@ -16,8 +16,12 @@ class Stream:
     """A subscription to a streamable channel: iterate to get values (or :class:`StreamSample` with
     ``meta=True``). Ends the subscription on :meth:`close` / leaving the ``with`` block.
 
-    Iteration raises :class:`LinkLost` if the link drops (subscriptions end with the link) and
-    :class:`Timeout` if no sample arrives within ``timeout`` seconds (when given).
+    The stream rides through link losses and device reboots: once the link is back the hub
+    subscribes again by itself and iteration goes on; the first sample after an outage has
+    ``gap`` >= 1 (see :class:`StreamSample`; :attr:`gaps` counts them). Iteration raises
+    :class:`Timeout` if no sample arrives within ``timeout`` seconds (when given; an outage longer
+    than that included), :class:`StreamEnded` if a rebooted device no longer has the channel, and
+    :class:`LinkLost` once the session is closed.
     """
 
     def __init__(self, session: Session, channel: Channel, interval_ms: int, *, meta: bool = False,
@@ -31,6 +35,8 @@ class Stream:
         self.granted_ms = self._sub.granted_ms
         #: samples lost (gaps in the device's sample counter)
         self.lost = 0
+        #: link outages ridden through (each reported on the next sample's ``gap``)
+        self.gaps = 0
 
     def __iter__(self) -> "Stream":
         return self
@@ -52,6 +58,7 @@ class Stream:
                 sub.cv.wait(left)
             s: StreamSample = sub.queue.popleft()
         self.lost += s.lost
+        self.gaps += s.gap
         return s if self.meta else s.value
 
     def get(self, timeout: Optional[float] = None) -> Optional[Any]:
@@ -96,6 +103,8 @@ class EventStream:
 
     Yields :class:`hubwire.ReceivedEvent` objects (``.name``, ``.value``, ``.seq``, ``.time``).
     ``timeout`` (s) makes iteration stop after that long without an event; :meth:`get` polls.
+    It rides through link losses and device reboots (events the device kept meanwhile arrive once
+    the link is back, each delivered once); it ends when the session closes.
     """
 
     def __init__(self, session: Session, names: Optional[Sequence[str]] = None, timeout: Optional[float] = None) -> None:

@@ -6,6 +6,7 @@ from typing import Any, Optional
 
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError
+from .text import clip, clip_list, show
 from .wire import messages as m
 from .wire.frame import Frame
 
@@ -19,7 +20,8 @@ def channel(desc: Optional[Descriptor], name: str) -> Channel:
         raise HubwireError("device not discovered yet")
     ch = desc.by_name(name)
     if ch is None:
-        raise KeyError(f"{desc.name} has no channel {name!r}; channels: {', '.join(c.name for c in desc.channels)}")
+        raise KeyError(f"{show(desc.name)} has no channel {clip(name)}; channels: "
+                       f"{clip_list(c.name for c in desc.channels)}")
     return ch
 
 

@@ -36,7 +36,7 @@ def find_port() -> str:
     ports = sorted(list_ports.comports(), key=lambda p: p.device)
     matches = [p for p in ports if p.vid in KNOWN_USB_VIDS]
     if len(matches) == 1:
-        return matches[0].device
+        return str(matches[0].device)
     seen = "; ".join(_port_line(p) for p in ports) or "none"
     if not matches:
         raise NoDeviceFound(

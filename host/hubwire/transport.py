@@ -215,9 +215,10 @@ class SerialTransport(Transport):
 
     def _thread_read(self, port: Any) -> None:
         loop = self._loop
+        serial_port: Any = port  # (``port`` itself is narrowed to Optional by the loop's test)
         while self._port is port:
             try:
-                data = port.read(max(1, port.in_waiting))
+                data = serial_port.read(max(1, serial_port.in_waiting))
             except Exception as e:  # noqa: BLE001 - reported as a lost port
                 if self._port is port:
                     loop.call_soon_threadsafe(self._thread_failed, port, e)  # type: ignore[union-attr]

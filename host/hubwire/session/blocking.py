@@ -92,7 +92,7 @@ def _answer(core: Any, p: Pending, retry: float, what: str) -> Frame:
         if p.answer is None:
             tx.silence(p, what)
             continue
-        a = tx.verdict(p, p.answer, what)
+        a: Optional[Frame] = tx.verdict(p, p.answer, what)
         if a is not None:
             return a
         # the device re-links on our hello; ask again (it was not applied) once it answered

@@ -226,6 +226,7 @@ class SessionCore:
         if outcome is HelloOutcome.VERSION:
             if self.fatal is None:
                 self.fatal = ProtocolVersionError(self.link.rejected_version, m.PROTOCOL_VERSION)
+                self.streams.end_all(self.fatal)
                 self._notify()
             return
         if outcome is HelloOutcome.FIRST:
@@ -240,7 +241,7 @@ class SessionCore:
             # itself, we answered, so it is linked again; its failsafes fired meanwhile
             self.stats.rehandshakes += 1
             self._lost_callbacks()
-            self.streams.end_all(LinkLost("the device dropped the link (its subscriptions ended)"))
+            self.streams.interrupt()  # its subscriptions ended: subscribed again once restored
             self._restored()
 
     def _lost_callbacks(self) -> None:
@@ -253,7 +254,7 @@ class SessionCore:
         self.events.last_seq = None
         self.descriptor_nonce = None  # rediscover (from the cache if the hash is known)
         self.tx.fail_all(LinkLost("device rebooted"))
-        self.streams.end_all(LinkLost("device rebooted"))
+        self.streams.interrupt()  # subscribed again once rediscovered
         if self.state is State.READY:
             self._lost_callbacks()  # it was up but we had not noticed the reboot: report the loss too
         if self.state is not State.CLOSED:
@@ -272,6 +273,8 @@ class SessionCore:
         for cb in list(self.link_restored_cbs):
             self.dispatch(cb)
         self._notify()
+        if self.state is State.READY:
+            self.streams.resume()
         self.maybe_discover()
 
     def link_down(self, why: str) -> None:
@@ -282,7 +285,7 @@ class SessionCore:
             self.state = State.LOST if self.device_hello is not None else State.CONNECTING
         exc = LinkLost(f"link to {self.url} lost ({why})")
         self.tx.fail_all(exc)
-        self.streams.end_all(exc)
+        self.streams.interrupt()  # streams ride through: subscribed again once the link is back
         self._notify()
         if was_up:
             log.info("hubwire: link to %s lost (%s)", self.url, why)
@@ -329,6 +332,7 @@ class SessionCore:
         self.descriptor_nonce = hello.nonce
         if self.link.linked and self.state is not State.CLOSED:
             self.state = State.READY
+            self.streams.resume()
         self._notify()
         if not first:
             for cb in list(self.reconnect_cbs):

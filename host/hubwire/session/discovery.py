@@ -42,7 +42,7 @@ class Discovery:
         digest = hello.digest
         # Reuse only what the device's SHA-256 digest vouches for: a device that announces none
         # (an older library) is always downloaded, never cached (PROTOCOL.md 7.1).
-        cur = self.core.descriptor
+        cur: Optional[Descriptor] = self.core.descriptor
         if digest is not None and cur is not None and descriptor_digest(cur.raw) == digest:
             stats.cache_hits += 1
             return cur
@@ -150,14 +150,16 @@ class _Download:
         retry = self.core.retry_timeout
         now = time.monotonic()
         left = min(p.sent_at + retry - now for p in self.inflight.values())
-        futs = [p.fut for p in self.inflight.values()]
+        futs = [p.fut for p in self.inflight.values() if p.fut is not None]  # coroutine waiters: always set
         if left > 0 and not any(f.done() for f in futs):
             await asyncio.wait(futs, timeout=left, return_when=asyncio.FIRST_COMPLETED)
 
     def _harvest(self, now: float) -> None:
         core = self.core
         for off, p in list(self.inflight.items()):
-            if not p.fut.done():
+            fut = p.fut
+            assert fut is not None  # registered for a coroutine
+            if not fut.done():
                 if now - p.sent_at >= core.retry_timeout:
                     # Chunk requests are idempotent: on a lossy line keep asking for as long as
                     # the download as a whole makes progress (connect_timeout).
@@ -166,7 +168,7 @@ class _Download:
                                       f"{p.tries} tries: no progress for {core.connect_timeout:g} s")
                     core.tx.retry(p)
                 continue
-            a = p.fut.result()  # raises LinkLost and the like
+            a = fut.result()  # raises LinkLost and the like
             if a.type == m.NAK and a.payload[:1] == bytes((NakCode.NOT_LINKED,)):
                 # the device re-links on the hello this NAK triggered: ask again when the retry
                 # timer fires (counts as a try)
@@ -187,8 +189,11 @@ class _Download:
         total = self.total
         if c.total != total:
             raise DescriptorError(f"descriptor length changed: hello said {total}, chunk says {c.total}")
-        if c.offset != off or off + len(c.data) > total:
-            raise DescriptorError(f"descriptor chunk for offset {c.offset} answers offset {off}")
+        if c.offset != off:
+            raise DescriptorError(f"descriptor chunk asked for offset {off} answers offset {c.offset}")
+        if off + len(c.data) > total:
+            raise DescriptorError(f"descriptor chunk at offset {off} with {len(c.data)} bytes runs past "
+                                  f"the end of the {total}-byte descriptor")
         if not c.data:
             raise DescriptorError(f"empty descriptor chunk at offset {off} of {total}")
         for i, b in enumerate(c.data):

@@ -3,16 +3,18 @@ and event queues; events that arrive before anyone listens are kept for the firs
 
 Flow control: when the application's callbacks lag behind (``DISPATCH_LIMIT`` waiting), new events
 are not acknowledged, so the device keeps them and retries later instead of the hub piling them up.
-Each queue is bounded (``EVENT_QUEUE_LIMIT``): beyond it the oldest event is dropped and counted.
+Each queue is bounded (``EVENT_QUEUE_LIMIT``): beyond it the oldest event is dropped, counted and
+a warning logged (see :class:`EventSink`).
 """
 from __future__ import annotations
 
 import logging
 import queue
 from collections import deque
-from typing import Any, Callable, Deque, Dict, List, Optional
+from typing import Any, Callable, Deque, Dict, FrozenSet, List, Optional
 
 from ..errors import InvalidValue
+from ..text import clip
 from ..wire import messages as m
 from ..wire.frame import Frame
 from .records import ReceivedEvent, Stats
@@ -30,12 +32,31 @@ BACKLOG_LIMIT = 1024
 
 
 class EventSink:
-    """Where a listener's events go: ``put`` (never blocks) and ``close`` (no more events)."""
+    """Where a listener's events go: ``put`` (never blocks) and ``close`` (no more events).
 
-    names: Optional[frozenset] = None
+    A full queue drops its oldest event for each new one: counted in ``Stats.events_dropped``, and
+    a warning logged when it starts dropping (once, and once more each time it drops again after
+    its reader caught up to half the limit)."""
+
+    names: Optional[FrozenSet[str]] = None
+    limit = EVENT_QUEUE_LIMIT
+    _dropping = False
 
     def put(self, ev: ReceivedEvent) -> None:
         raise NotImplementedError
+
+    def note_size(self, size: int) -> None:
+        """Before adding to a queue of ``size`` items: recovered once it drained to half the limit."""
+        if self._dropping and size <= self.limit // 2:
+            self._dropping = False
+
+    def note_dropped(self, stats: Stats) -> None:
+        """The oldest event was dropped to make room."""
+        stats.events_dropped += 1
+        if not self._dropping:
+            self._dropping = True
+            log.warning("hubwire: an event queue is full (%d events): its reader falls behind, so the oldest "
+                        "events are dropped from now on (counted in stats.events_dropped)", self.limit)
 
     def close(self) -> None:
         raise NotImplementedError
@@ -44,12 +65,14 @@ class EventSink:
 class QueueSink(EventSink):
     """A thread-safe bounded queue for the synchronous API; ``None`` in it means closed."""
 
-    def __init__(self, stats: Stats, names: Optional[frozenset] = None, limit: int = EVENT_QUEUE_LIMIT) -> None:
+    def __init__(self, stats: Stats, names: Optional[FrozenSet[str]] = None, limit: int = EVENT_QUEUE_LIMIT) -> None:
         self.q: "queue.Queue[Optional[ReceivedEvent]]" = queue.Queue(limit)
         self.stats = stats
         self.names = names
+        self.limit = limit
 
     def _put(self, item: Optional[ReceivedEvent]) -> None:
+        self.note_size(self.q.qsize())
         while True:
             try:
                 self.q.put_nowait(item)
@@ -57,7 +80,7 @@ class QueueSink(EventSink):
             except queue.Full:
                 try:
                     self.q.get_nowait()
-                    self.stats.events_dropped += 1
+                    self.note_dropped(self.stats)
                 except queue.Empty:
                     pass
 
@@ -101,7 +124,7 @@ class Events:
         try:
             value = ch.codec.decode(f.payload)
         except InvalidValue as e:
-            log.warning("hubwire: malformed event %s: %s", ch.name, e)
+            log.warning("hubwire: malformed event %s: %s", clip(ch.name), clip(str(e), 160))
             return
         self.deliver(ReceivedEvent(ch.name, value, f.seq, now, f.id))
 
@@ -141,7 +164,7 @@ class Events:
         if sink in self.sinks:
             self.sinks.remove(sink)
 
-    def _take_backlog(self, names: Optional[frozenset]) -> List[ReceivedEvent]:
+    def _take_backlog(self, names: Optional[FrozenSet[str]]) -> List[ReceivedEvent]:
         taken = [ev for ev in self.backlog if names is None or ev.name in names]
         if taken:
             keep = [ev for ev in self.backlog if not (names is None or ev.name in names)]

@@ -76,9 +76,11 @@ class Session:
     async def _make_core(self) -> SessionCore:
         core = SessionCore(self.transport, dispatch=self._dispatcher, **self._options)
         lost, restored, reconnect = self._initial_cbs
-        for lst, cb in ((core.link_lost_cbs, lost), (core.link_restored_cbs, restored), (core.reconnect_cbs, reconnect)):
+        for lst, cb in ((core.link_lost_cbs, lost), (core.link_restored_cbs, restored)):
             if cb is not None:
                 lst.append(cb)
+        if reconnect is not None:
+            core.reconnect_cbs.append(reconnect)
         return core
 
     def close(self) -> None:

@@ -32,13 +32,18 @@ class ReceivedEvent:
 @dataclass(frozen=True)
 class StreamSample:
     """One streamed sample: ``value``, device-side ``since_ms`` since the previous sample, ``seq``
-    (the subscription's sample counter) and ``lost`` (samples missed before this one, from seq gaps)."""
+    (the subscription's sample counter), ``lost`` (samples missed before this one, from seq gaps),
+    arrival ``time`` (``time.monotonic()``) and ``gap``: the link outages (losses, device reboots)
+    between the previous sample and this one, which the hub rode through by subscribing again.
+    ``gap`` is 0 normally; when it is not, ``lost`` is 0 (the device counts its samples afresh) and
+    how long the outage lasted is the difference of ``time`` with the previous sample."""
 
     value: Any
     since_ms: int
     seq: int
     lost: int
     time: float
+    gap: int = 0
 
 
 @dataclass
@@ -62,6 +67,7 @@ class Stats:
     not_linked: int = 0
     events_deferred: int = 0
     events_dropped: int = 0
+    resubscribes: int = 0
 
     def as_dict(self) -> Dict[str, int]:
         """The counters as a plain dict (a snapshot)."""

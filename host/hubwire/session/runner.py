@@ -8,10 +8,11 @@ callbacks never run on that loop: each session hands them to its own dispatcher 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import logging
 import queue
 import threading
-from typing import Any, Awaitable, Callable, Optional, Tuple, TypeVar
+from typing import Any, Awaitable, Callable, Optional, Set, Tuple, TypeVar
 
 __all__ = ["acquire_loop", "release_loop", "run_sync", "on_loop_thread", "ThreadDispatcher", "LoopDispatcher"]
 
@@ -68,7 +69,7 @@ def run_sync(loop: asyncio.AbstractEventLoop, aw: Awaitable[T]) -> T:
     """Run a coroutine on ``loop`` from another thread and return its result (or raise)."""
     if on_loop_thread():
         raise RuntimeError("hubwire: a synchronous call cannot be made on the hub's event loop thread")
-    fut = asyncio.run_coroutine_threadsafe(aw, loop)  # type: ignore[arg-type]
+    fut: "concurrent.futures.Future[T]" = asyncio.run_coroutine_threadsafe(aw, loop)  # type: ignore[arg-type]
     try:
         return fut.result()
     except BaseException:
@@ -113,7 +114,7 @@ class LoopDispatcher:
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self._loop = loop
         self._waiting = 0
-        self._tasks: set = set()
+        self._tasks: "Set[asyncio.Task[Any]]" = set()
 
     def __call__(self, fn: Callable[..., Any], *args: Any) -> None:
         self._waiting += 1

@@ -249,7 +249,7 @@ class Transactions:
             # the device re-links on our hello; ask again (it was not applied)
             hello = core.link.next_hello()
             p.rearm()
-            await asyncio.wait((hello, p.fut), timeout=retry, return_when=asyncio.FIRST_COMPLETED)  # type: ignore[arg-type]
+            await asyncio.wait((hello, p.fut), timeout=retry, return_when=asyncio.FIRST_COMPLETED)
             hello.cancel()
             if p.fut.done():  # type: ignore[union-attr]
                 p.fut.result()  # type: ignore[union-attr]  # the link was lost meanwhile: raise

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from binascii import crc_hqx
-from typing import List, NamedTuple, Optional
+from typing import Dict, List, NamedTuple, Optional
 
 from cobs.cobs import DecodeError as _CobsError
 from cobs.cobs import decode as _cobs_decode
@@ -53,7 +53,8 @@ def encode_frame(type: int, seq: int, id: int, payload: bytes = b"") -> bytes:
         raise ValueError(f"payload of {len(payload)} bytes exceeds the protocol maximum of 255")
     raw = bytes((type, seq, id)) + bytes(payload)
     crc = crc_hqx(raw, 0xFFFF)
-    return _cobs_encode(raw + bytes((crc & 0xFF, crc >> 8))) + b"\x00"
+    encoded: bytes = _cobs_encode(raw + bytes((crc & 0xFF, crc >> 8)))
+    return encoded + b"\x00"
 
 
 def max_encoded_length(raw_length: int) -> int:
@@ -146,7 +147,7 @@ class FrameDecoder:
         """
         return (self.sample + self._pending)[:NOISE_SAMPLE_SIZE]
 
-    def counters(self) -> dict:
+    def counters(self) -> Dict[str, int]:
         """The three drop counters as a dict ``{"crc", "overflow", "dropped"}``."""
         return {"crc": self.crc, "overflow": self.overflow, "dropped": self.dropped}
 

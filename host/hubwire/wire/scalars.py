@@ -64,9 +64,9 @@ def scalar_checker(t: str, where: str) -> Callable[[Any], Any]:
                 if not v.is_integer():
                     raise InvalidValue(f"{where}: expected an integer for {t}, got {describe_value(v)}", BAD_VALUE)
                 v = int(v)
-            if not lo <= v <= hi:  # type: ignore[operator]
+            if not lo <= v <= hi:
                 raise InvalidValue(f"{where}: {v} is outside the {t} range {lo}..{hi}", OUT_OF_RANGE)
-            return v
+            return int(v)
         return check_int
     if t in FLOAT_TYPES:
         is32 = t == "f32"

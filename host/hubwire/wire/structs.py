@@ -7,7 +7,7 @@ from typing import Any, Dict, Sequence, Tuple
 __all__ = ["StructValue", "make_struct_class"]
 
 
-class StructValue(tuple):
+class StructValue(Tuple[Any, ...]):
     """Base of the struct value classes built at runtime: a tuple with named fields.
 
     ``value.ax``, ``value[0]``, ``value._asdict()``, ``value._replace(ax=1.0)``; fields whose name is a
@@ -29,7 +29,7 @@ class StructValue(tuple):
             raise TypeError(f"{cls.__name__} takes {len(cls._fields)} values ({', '.join(cls._fields)}), got {len(args)}")
         return tuple.__new__(cls, args)
 
-    def __getitem__(self, key: Any) -> Any:  # type: ignore[override]
+    def __getitem__(self, key: Any) -> Any:
         if isinstance(key, str):
             try:
                 return tuple.__getitem__(self, self._fields.index(key))

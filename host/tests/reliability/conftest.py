@@ -8,16 +8,16 @@ import subprocess
 import threading
 import time
 import tty
-from typing import Any, Callable, Dict, Iterator, List, Optional, Set
+from typing import Any, Callable, Iterator, List, Optional, Set
 
 import pytest
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-
 from hubwire.testing import emulator_binary
-from hubwire.testing.faultlink import FaultLink, Faults, FaultyTransport, stop_process
+from hubwire.testing.faultlink import FaultLink, Faults, FaultyTransport, stop_process  # noqa: F401 - for the tests
 from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 
 
 class Emu:

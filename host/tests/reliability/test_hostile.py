@@ -7,9 +7,7 @@ values out of range. The hub must refuse with a clear error, stay bounded and le
 from __future__ import annotations
 
 import json
-import os
 import random
-import threading
 import time
 import tracemalloc
 from typing import Any, Iterator, List
@@ -25,7 +23,7 @@ from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
 from hubwire.wire.messages import NakCode
 
-from .conftest import GOOD_DESCRIPTOR, HostileDevice, fd_count, hubwire_thread_ids, hubwire_threads, settle, wait_until
+from .conftest import HostileDevice, fd_count, hubwire_thread_ids, hubwire_threads, settle
 
 #: tracemalloc peak allowed while a device floods the hub for FLOOD_SECONDS (documented cap)
 FLOOD_MEMORY_CAP = 4 * 1024 * 1024

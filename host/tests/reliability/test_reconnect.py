@@ -3,9 +3,8 @@ front of it goes away) and comes back on the same path. The hub must notice, tel
 fail calls fast with LinkLost meanwhile, re-open the port with backoff, and carry on."""
 from __future__ import annotations
 
-import threading
 import time
-from typing import Any, List
+from typing import Any
 
 import pytest
 

@@ -11,14 +11,13 @@ import os
 import time
 from typing import Any
 
-import pytest
 
 import hubwire
 
 from hubwire.transport import SerialTransport
 
 from .conftest import REPO, Faults, FaultyTransport
-from hubwire.testing.faultlink.soak import SOAK_FAULTS, check, run_soak
+from hubwire.testing.faultlink.soak import check, run_soak
 
 
 def test_soak_exactly_once_no_corruption_no_reset(emulator_bin: str, tmp_path: Any) -> None:

@@ -16,10 +16,10 @@ from typing import Any, Callable, Iterator, List, Optional
 
 import pytest
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-
 from hubwire.testing import tapped
 from hubwire.testing.faultlink import stop_process
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 BUILD_HINT = "build them with `make simuno uno-firmware`"
 
 #: Like an Uno's bootloader after the DTR reset: the sketch starts ~1 s after the port is opened

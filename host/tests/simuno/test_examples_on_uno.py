@@ -13,7 +13,7 @@ from hubwire.errors import InvalidValue, NakError
 from hubwire.testing import tap_of
 from hubwire.wire.messages import NakCode
 
-from .conftest import REPO, Examples, drain_events, take, wait_until
+from .conftest import REPO, Examples, take, wait_until
 
 # What each sketch declares, as the hub shows it: (name, access, type, unit, min, max, failsafe).
 DECLARED = {

@@ -12,7 +12,7 @@ import statistics
 import struct
 import threading
 import time
-from typing import Any, Dict, List
+from typing import Any, List
 
 import pytest
 

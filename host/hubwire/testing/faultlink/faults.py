@@ -13,7 +13,7 @@ import os
 import random
 import time
 from collections import deque
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 from typing import Any, Deque, Dict, List, Optional, Tuple
 
 __all__ = ["Faults", "DirectionStats", "Direction", "directions", "select_directions", "link_stats", "MAX_QUEUED",
