@@ -128,7 +128,8 @@ class Hello:
         bytes after the digest (later additions) are ignored."""
         _need(payload, cls.SIZE, "hello", exact=False)
         digest = bytes(payload[cls.SIZE:cls.SIZE_WITH_DIGEST]) if len(payload) >= cls.SIZE_WITH_DIGEST else None
-        return cls(*_HELLO.unpack_from(payload), digest=digest)
+        version, flags, nonce, max_payload, heartbeat_ms, dhash, dlen = _HELLO.unpack_from(payload)
+        return cls(version, flags, nonce, max_payload, heartbeat_ms, dhash, dlen, digest)
 
     @property
     def is_device(self) -> bool:
