@@ -262,11 +262,12 @@ class Link:
         except m.PayloadError:
             self.decoder.dropped += 1
             return
-        self.peer_hb = hb
+        prev, self.peer_hb = self.peer_hb, hb
         self.peer_hb_at = now
         self.peer_hb_count += 1
         self._beats_since_up += 1
-        if hb.since_ms == 0 and self._beats_since_up > 1 and self.linked:
+        fresh = prev is None or hb.counter != prev.counter  # not a duplicated frame
+        if hb.since_ms == 0 and fresh and self._beats_since_up > 1 and self.linked:
             # the device's first heartbeat of a new link-up that we did not see: it dropped the
             # link and took one of our probes as the hello that brings it back
             self._up()

@@ -110,6 +110,22 @@ class _Run:
                          f"token {self.load.token}, {len(self.load.lost)} link losses")
                 next_report = time.monotonic() + 10
             self.load.step()
+            self._revive_streams()
+
+    def _revive_streams(self) -> None:
+        """A link loss outside the planned events ends the subscriptions: open them again."""
+        import hubwire
+
+        load = self.load
+        alive = load.consumers and all(t.is_alive() for t in load.consumers)
+        if not self.streams or alive or self.dev.state != "ready":
+            return
+        load.stop_streams()
+        try:
+            load.start_streams()
+            self.report["stream_restarts"] = self.report.get("stream_restarts", 0) + 1
+        except hubwire.HubwireError:  # the subscribe itself lost on the noisy link: next step
+            load.stop_streams()
 
     def dead_link(self) -> None:
         """Both directions cut for DEAD_TIMEOUTS loss timeouts, the load going on (it fails fast)."""

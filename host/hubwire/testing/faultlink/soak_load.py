@@ -94,7 +94,9 @@ class Load:
     # streams: many more frames, every sample checked
     def start_streams(self) -> None:
         self._stop_streams.clear()
-        self.opened = [self.dev.stream(n, interval_ms=10, timeout=1.0) for n in STREAMS]
+        self.opened = []
+        for n in STREAMS:  # one by one: if a subscribe fails, those made are still closed
+            self.opened.append(self.dev.stream(n, interval_ms=10, timeout=1.0))
         self.consumers = [threading.Thread(target=self._consume, args=(st, st.channel.name), daemon=True)
                           for st in self.opened]
         for t in self.consumers:
