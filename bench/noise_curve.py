@@ -104,8 +104,15 @@ def main(argv: Any = None) -> int:
     p.add_argument("--seed", type=int, default=3)
     p.add_argument("--ber", default=",".join(f"{b:g}" for b in BERS))
     p.add_argument("--every", type=float, default=1.0, help="seconds between control writes")
+    p.add_argument("--baseline", action="store_true",
+                   help="the hub's loss detection as before the probes: heartbeats at the announced "
+                        "interval, no probe (to compare both under the same load)")
     p.add_argument("--json", default=None)
     a = p.parse_args(argv)
+    if a.baseline:
+        from hubwire.session import link
+        link.HEARTBEAT_LEAD = 1.0
+        link.PROBE_AFTER = link.LOSS_HEARTBEATS + 1  # the loss comes first: never probes
     rows = []
     with tempfile.TemporaryDirectory() as d:
         for i, ber in enumerate(float(b) for b in a.ber.split(",")):

@@ -203,7 +203,8 @@ class Link:
         self._next_hb = 0.0
         self._heartbeat_tick()
         if self._loss_timer is None:
-            self._loss_timer = self.loop.call_later(PROBE_AFTER * self._peer_hb_ms / 1000.0, self._loss_check)
+            first = min(PROBE_AFTER * self._peer_hb_ms / 1000.0, self._loss_after() + 0.001)
+            self._loss_timer = self.loop.call_later(first, self._loss_check)
 
     def down(self) -> None:
         """The link is lost: stop heartbeats, say hello again."""
