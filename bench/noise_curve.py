@@ -52,7 +52,7 @@ def one(ber: float, seconds: float, seed: int, workdir: str, every: float = 1.0)
             dev.on("link_lost", lambda: hub_lost.append(time.monotonic()))
             dev.on("bumper", events.append)
             failsafes0 = dev.failsafes
-            sent = acked = queued = 0
+            sent = acked = queued = not_linked = 0
             fl.set_faults(ber=ber, drop=DROP)
             t0 = time.monotonic()
             next_event = t0 + 2 * every
@@ -61,13 +61,15 @@ def one(ber: float, seconds: float, seed: int, workdir: str, every: float = 1.0)
                 try:
                     dev.left = ((sent * 7919) % 2001 - 1000) / 1000.0
                     acked += 1
+                except hubwire.NakError:  # NOT_LINKED after every try: the device had dropped the link
+                    not_linked += 1
                 except (hubwire.Timeout, hubwire.LinkLost):
                     pass
                 if time.monotonic() >= next_event:
                     next_event += 2 * every
                     try:
                         queued += dev.selftest(1)
-                    except (hubwire.Timeout, hubwire.LinkLost):
+                    except (hubwire.Timeout, hubwire.LinkLost, hubwire.NakError):
                         pass
                 time.sleep(max(0.0, t0 + sent * every - time.monotonic()))
             elapsed = time.monotonic() - t0
@@ -79,7 +81,7 @@ def one(ber: float, seconds: float, seed: int, workdir: str, every: float = 1.0)
         return {"ber": ber, "drop": DROP, "seconds": round(elapsed, 1), "seed": seed,
                 "hub_losses": len(hub_lost), "hub_losses_per_min": round(len(hub_lost) / minutes, 2),
                 "device_losses_per_min": round(failsafes / minutes, 2), "failsafes": failsafes,
-                "controls_sent": sent, "controls_acked": acked, "events_queued": queued,
+                "controls_sent": sent, "controls_acked": acked, "controls_not_linked": not_linked, "events_queued": queued,
                 "events_delivered": len(events), "frames": st["frames"],
                 "heartbeat_survival": round(survival(ber, DROP), 3)}
     finally:

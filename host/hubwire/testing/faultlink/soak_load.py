@@ -55,7 +55,7 @@ class Segment:
 
     def __init__(self, first_token: int) -> None:
         self.first_sent = first_token
-        self.sent = self.acked = self.timeouts = self.lost = 0
+        self.sent = self.acked = self.timeouts = self.lost = self.not_linked = 0
         self.events: List[Tuple[int, bool]] = []
         self.st_returned = self.st_timeouts = 0
         self.st_batches: List[int] = []
@@ -141,8 +141,11 @@ class Load:
             seg.lost += 1
             time.sleep(0.05)
             return
-        except hw.NakError as e:  # a corrupted frame that passed the CRC would show here
-            self.naks += 1
+        except hw.NakError as e:
+            if e.error == "NOT_LINKED":  # the device had dropped the link: refused, not applied
+                seg.not_linked += 1
+                return
+            self.naks += 1  # a corrupted frame that passed the CRC would show here
             self.log(f"soak: NAK on token {self.token}: {e}")
         if self.k % 10 == 0:
             self._write_and_read_left()
@@ -162,8 +165,9 @@ class Load:
         except (self.hw.Timeout, self.hw.LinkLost):
             self.read_timeouts += 1
         except self.hw.NakError as e:
-            self.naks += 1
-            self.log(f"soak: NAK on left: {e}")
+            if e.error != "NOT_LINKED":
+                self.naks += 1
+                self.log(f"soak: NAK on left: {e}")
 
     def _selftest(self) -> None:
         seg = self.seg
@@ -171,7 +175,7 @@ class Load:
             q = self.dev.selftest(4)
             seg.st_returned += q
             seg.st_batches.append(q)
-        except (self.hw.Timeout, self.hw.LinkLost):  # run or not: up to 4 events more may come
+        except (self.hw.Timeout, self.hw.LinkLost, self.hw.NakError):  # run or not: up to 4 events more
             seg.st_timeouts += 1
             seg.st_batches.append(-1)
 
@@ -182,10 +186,18 @@ class Load:
     def close_segment(self, final: bool) -> Dict[str, Any]:
         """On the clean link: one last acked token, every queued event in, the device's counters."""
         seg = self.seg
-        self.token += 1
-        seg.sent += 1
-        self.dev.token = self.token  # the link is clean and up: this one is acknowledged
-        seg.acked += 1
+        while True:  # the link is clean; should it still drop, the next token is the last one
+            self.token += 1
+            seg.sent += 1
+            wait_for(lambda: self.dev.state == "ready", 30)
+            try:
+                self.dev.token = self.token
+                seg.acked += 1
+                break
+            except self.hw.Timeout:
+                seg.timeouts += 1
+            except self.hw.LinkLost:
+                seg.lost += 1
         with self.ev_cv:
             self.ev_cv.wait_for(lambda: len(seg.events) >= seg.st_returned, 15)
         time.sleep(0.5)  # retried events still in flight (there should be none beyond the queued ones)
@@ -196,6 +208,7 @@ class Load:
         expected = [i % 2 == 0 for q in seg.st_batches if q >= 0 for i in range(q)]
         r = {"tokens_sent": seg.sent, "first_sent": seg.first_sent, "last_sent": self.token,
              "acked": seg.acked, "timeouts": seg.timeouts, "link_lost_errors": seg.lost,
+             "not_linked": seg.not_linked,
              "device": c, "events_queued": seg.st_returned, "selftest_timeouts": seg.st_timeouts,
              "events_delivered": len(evs), "event_seq_gaps_or_dups": sum(1 for d in steps if d != 1),
              "event_order_ok": seg.st_timeouts > 0 or [v for _, v in evs] == expected}
@@ -217,7 +230,7 @@ def check_segment(i: int, s: Dict[str, Any]) -> List[str]:
         bad.append(f"{where}: applied {c['tokens_applied']} + never applied {never} != sent {s['tokens_sent']}")
     if c["last_token"] != s["last_sent"]:
         bad.append(f"{where}: the device's last token is {c['last_token']}, the hub's {s['last_sent']}")
-    uncertain = s["timeouts"] + s["link_lost_errors"]
+    uncertain = s["timeouts"] + s["link_lost_errors"] + s.get("not_linked", 0)
     if not s["acked"] <= c["tokens_applied"] <= s["acked"] + uncertain or never > uncertain:
         bad.append(f"{where}: applied {c['tokens_applied']}, never applied {never}: not within acked "
                    f"{s['acked']} .. acked + unacknowledged {uncertain}")
