@@ -2,10 +2,19 @@
 loss detection and re-opening a port that went away.
 
 Everything here runs on the session's event loop and is driven by the transport's callbacks and
-by loop timers: a hello every 100 ms while unlinked, a heartbeat every ``heartbeat_ms`` while
-linked, a loss check due 4 device heartbeat intervals after the last frame heard, and re-opening a
-vanished port with backoff (0.1 s doubling to 2 s). No timer runs for nothing: while linked there
-is no hello timer, while unlinked no heartbeat or loss timer.
+by loop timers: a hello every 100 ms while unlinked, a heartbeat a little more often than every
+``heartbeat_ms`` while linked, a loss check due 4 device heartbeat intervals after the last frame
+heard, and re-opening a vanished port with backoff (0.1 s doubling to 2 s). No timer runs for
+nothing: while linked there is no hello timer, while unlinked no heartbeat or loss timer.
+
+Loss detection on a noisy line (docs/RELIABILITY.md, "Heavy noise"). A heartbeat sent exactly
+every interval lands on the peer's deadline (4 intervals of silence) with its fourth beat, so only
+three of them count; the hub therefore sends its own on a fixed grid at 15/16 of the interval it
+announced, and all four fall inside the device's window. The device's heartbeats keep their
+interval, so the hub makes up for its fourth: once the device has been silent for 2 intervals the
+hub probes with a hello every half interval (a linked device answers a hello at once, and a hello
+is no transaction: duplicate detection is untouched). A dead link answers nothing, so it is still
+declared lost 4 intervals after the last frame; a healthy link never probes.
 """
 from __future__ import annotations
 
@@ -31,6 +40,12 @@ REOPEN_FIRST = 0.1
 REOPEN_MAX = 2.0
 #: the link is lost after this many of the device's heartbeat intervals without a frame
 LOSS_HEARTBEATS = 4
+#: the hub's heartbeats go out at this fraction of its announced interval (see the module docstring)
+HEARTBEAT_LEAD = 15 / 16
+#: after this many silent device intervals the hub probes with a hello ...
+PROBE_AFTER = 2
+#: ... and again every this many intervals until the link is lost or heard again
+PROBE_EVERY = 0.5
 
 
 def new_nonce() -> int:
@@ -78,6 +93,10 @@ class Link:
         self._peer_hb_ms = 250
         self._hb_counter = 0
         self._last_hb_tx = 0.0
+        self._next_hb = 0.0
+        self._beats_since_up = 0
+        #: hellos sent to a silent device while linked (loss detection's probes)
+        self.probes = 0
         self._reopen_delay = REOPEN_FIRST
         self._hello_waiters: List["asyncio.Future[None]"] = []
         self._hello_timer: Optional[asyncio.TimerHandle] = None
@@ -177,12 +196,15 @@ class Link:
     def _up(self) -> None:
         """Linked: heartbeats from now on, and watch for silence."""
         self.linked = True
+        self._beats_since_up = 0
         if self._hello_timer is not None:
             self._hello_timer.cancel()
             self._hello_timer = None
+        self._next_hb = 0.0
         self._heartbeat_tick()
         if self._loss_timer is None:
-            self._loss_timer = self.loop.call_later(self._loss_after(), self._loss_check)
+            first = min(PROBE_AFTER * self._peer_hb_ms / 1000.0, self._loss_after() + 0.001)
+            self._loss_timer = self.loop.call_later(first, self._loss_check)
 
     def down(self) -> None:
         """The link is lost: stop heartbeats, say hello again."""
@@ -198,15 +220,22 @@ class Link:
         return LOSS_HEARTBEATS * self._peer_hb_ms / 1000.0
 
     def _loss_check(self) -> None:
+        """Lost after LOSS_HEARTBEATS silent device intervals; probing from PROBE_AFTER on."""
         self._loss_timer = None
         if not self.linked or self.closed:
             return
+        beat = self._peer_hb_ms / 1000.0
         silent = time.monotonic() - self.last_rx
         limit = self._loss_after()
         if silent > limit:
             self.owner.link_down(f"nothing heard for {silent * 1000:.0f} ms")
             return
-        self._loss_timer = self.loop.call_later(limit - silent + 0.001, self._loss_check)
+        due = PROBE_AFTER * beat
+        if silent >= due - 0.001:
+            self.probes += 1
+            self.send_hello(reply=False)
+            due = silent + PROBE_EVERY * beat
+        self._loss_timer = self.loop.call_later(min(due, limit + 0.001) - silent, self._loss_check)
 
     def _heartbeat_tick(self) -> None:
         if self._hb_timer is not None:
@@ -215,13 +244,16 @@ class Link:
         if not self.linked or self.closed:
             return
         now = time.monotonic()
+        period = self.heartbeat_ms / 1000.0 * HEARTBEAT_LEAD
+        # a fixed grid: a late tick does not push the next ones later (unless it is a whole period late)
+        self._next_hb = self._next_hb + period if self._next_hb + period > now else now + period
         since = 0 if self._hb_counter == 0 else int((now - self._last_hb_tx) * 1000)
         self._hb_counter = (self._hb_counter + 1) & 0xFFFF
         d = self.decoder
         hb = m.Heartbeat(self._hb_counter, min(since, 0xFFFF), d.crc, d.overflow, d.dropped)
         self._last_hb_tx = now
         self.send_frame(m.HEARTBEAT, self._hb_counter & 0xFF, 0, hb.pack())
-        self._hb_timer = self.loop.call_later(self.heartbeat_ms / 1000.0, self._heartbeat_tick)
+        self._hb_timer = self.loop.call_later(self._next_hb - now, self._heartbeat_tick)
 
     # ------------------------------------------------------------------------------ frames in
 
@@ -231,9 +263,16 @@ class Link:
         except m.PayloadError:
             self.decoder.dropped += 1
             return
-        self.peer_hb = hb
+        prev, self.peer_hb = self.peer_hb, hb
         self.peer_hb_at = now
         self.peer_hb_count += 1
+        self._beats_since_up += 1
+        fresh = prev is None or hb.counter != prev.counter  # not a duplicated frame
+        if hb.since_ms == 0 and fresh and self._beats_since_up > 1 and self.linked:
+            # the device's first heartbeat of a new link-up that we did not see: it dropped the
+            # link and took one of our probes as the hello that brings it back
+            self._up()
+            self.owner.on_hello(HelloOutcome.ANNOUNCE)
 
     def _on_hello(self, f: Frame, now: float) -> None:
         outcome = self._hello_outcome(f)

@@ -38,6 +38,7 @@ class Faults:
     delay: float = 0.0
     stall_every: float = 0.0
     stall_ms: float = 0.0
+    cut: bool = False  # a dead wire: every byte (garbage too) is discarded and counted
 
     def validate(self) -> "Faults":
         for name in ("ber", "drop", "dup", "truncate"):
@@ -69,6 +70,7 @@ class DirectionStats:
     garbage_bytes: int = 0
     stalls: int = 0
     overflow_dropped: int = 0    # bytes discarded because the receiver did not read (not a fault)
+    bytes_cut: int = 0           # bytes discarded while the wire was cut
 
     @property
     def faults(self) -> int:
@@ -182,6 +184,9 @@ class Direction:
 
     def _emit(self, data: bytes, now: float) -> None:
         if not data:
+            return
+        if self.faults.cut:
+            self.stats.bytes_cut += len(data)
             return
         if self.queued + len(data) > MAX_QUEUED:
             self.stats.overflow_dropped += len(data)

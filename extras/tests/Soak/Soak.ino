@@ -1,0 +1,94 @@
+// Soak: the device the reliability soak (host/hubwire/testing/faultlink/soak.py) runs against, in
+// the emulator (build/emulator/hubwire-soak-emulator) so the soak exercises the real library.
+//
+// Rover's motors, sensors, bumper and selftest, plus a writable u32 `token`: the hub writes
+// strictly increasing tokens, and the sketch itself counts how each one was applied. A token not
+// above the last one applied means a write was applied twice (or out of order): `twice`. Tokens
+// skipped between two applied ones were never applied (a write that timed out): `gaps`. The hub's
+// check needs no inference: twice must be 0 and applied + never applied must equal what it sent.
+#include <Hubwire.h>
+
+Hubwire hub(Serial);
+
+float left, right;  // m/s, -1..1
+uint16_t rangeCm[4];
+uint16_t batteryMv = 7400;
+hubwire::Event<bool> bumper;
+uint16_t failsafes;  // link losses the device declared (each fired the failsafe)
+uint32_t applied;    // writes of left and right applied
+uint32_t uptime;     // millis() as of the last loop(): lets the hub relate the two clocks
+uint32_t failsafeAt;  // millis() when the failsafe last fired (how fast a dead link is noticed)
+
+uint32_t token;          // the last token written by the hub
+uint32_t lastToken;      // the last token applied (0: none since boot)
+uint32_t firstToken;     // the first token applied since boot
+uint32_t tokensApplied;  // onChange calls for token
+uint32_t twice;          // tokens not above the last applied one: applied twice or out of order
+uint32_t gaps;           // tokens skipped between two applied ones
+
+void countWrite() { ++applied; }
+
+void tokenChanged() {
+  ++tokensApplied;
+  if (lastToken == 0) {
+    firstToken = token;
+  } else if (token <= lastToken) {
+    ++twice;
+    return;
+  } else {
+    gaps += token - lastToken - 1;
+  }
+  lastToken = token;
+}
+
+uint8_t selftest(uint8_t count) {
+  uint8_t queued = 0;
+  for (uint8_t i = 0; i < count; ++i)
+    if (hub.emit(bumper, i % 2 == 0)) ++queued;
+  return queued;
+}
+
+void stopMotors() {
+  ++failsafes;
+  failsafeAt = millis();
+}
+
+HUBWIRE_CHANNELS(channels, device("soak").firmware("1.0.0"),
+  expose("left", left).writable().streamable().range(-1.0f, 1.0f).failsafe(0.0f).onChange(countWrite),
+  expose("right", right).writable().streamable().range(-1.0f, 1.0f).failsafe(0.0f).onChange(countWrite),
+  expose("range", rangeCm).streamable().unit("cm"),
+  expose("battery", batteryMv).streamable().unit("mV"),
+  event("bumper", bumper),
+  action("selftest", selftest),
+  expose("failsafes", failsafes),
+  expose("applied", applied),
+  expose("uptime", uptime),
+  expose("failsafe_at", failsafeAt),
+  expose("token", token).writable().onChange(tokenChanged),
+  expose("last_token", lastToken),
+  expose("first_token", firstToken),
+  expose("tokens_applied", tokensApplied),
+  expose("twice", twice),
+  expose("gaps", gaps));
+
+// Stand-in sensors with known bounds (the soak checks every streamed sample against them).
+void readSensors() {
+  static uint32_t at;
+  if (millis() - at < 20) return;
+  at = millis();
+  uint16_t load = (uint16_t)((fabs(left) + fabs(right)) * 100);  // 0..200
+  for (uint8_t i = 0; i < 4; ++i) rangeCm[i] = (uint16_t)(100 + 50 * i + load / 11);
+  batteryMv = (uint16_t)(7400 - load);
+}
+
+void setup() {
+  Serial.begin(115200);
+  hub.onLinkLost(stopMotors);
+  hub.begin(channels);
+}
+
+void loop() {
+  uptime = millis();
+  hub.update();
+  readSensors();
+}
