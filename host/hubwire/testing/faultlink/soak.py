@@ -54,7 +54,7 @@ def soak_emulator_binary() -> str:
         repo_root() or os.getcwd(), "build", "emulator", "hubwire-soak-emulator")
 
 
-def start_emulator(binary: str, link: str) -> subprocess.Popen:
+def start_emulator(binary: str, link: str) -> "subprocess.Popen[bytes]":
     proc = subprocess.Popen([binary, "--link", link], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             stdin=subprocess.DEVNULL)
     assert proc.stdout is not None

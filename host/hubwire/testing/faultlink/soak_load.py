@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 
 #: channels streamed at 100 Hz, each sample checked against what it can be
 STREAMS = ("left", "right", "battery", "range")
@@ -21,15 +21,15 @@ def value_for(k: int) -> float:
     return (((k * 7919) % (1 << 21)) - (1 << 20)) / float(1 << 20)
 
 
-def plausible(name: str, value: Any, written: set) -> bool:
+def plausible(name: str, value: Any, written: Set[float]) -> bool:
     """What a sample can be (extras/tests/Soak/Soak.ino, readSensors()): left was written by the
     soak (or is the failsafe 0), right never was, battery and range follow the sketch's formulas."""
     if name == "left":
         return value in written
     if name == "right":
-        return value == 0.0
+        return bool(value == 0.0)
     if name == "battery":
-        return 7200 <= value <= 7400
+        return bool(7200 <= value <= 7400)
     if name == "range":  # all zero until the sketch's first sensor read, 20 ms after boot
         return len(value) == 4 and (tuple(value) == (0, 0, 0, 0)
                                     or all(100 + 50 * i <= x < 120 + 50 * i for i, x in enumerate(value)))
