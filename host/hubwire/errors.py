@@ -27,7 +27,7 @@ class ProtocolVersionError(HubwireError):
     def __init__(self, device_version: int, hub_version: int) -> None:
         super().__init__(
             f"device speaks Hubwire protocol version {device_version}, this hub speaks version "
-            f"{hub_version}; update the {'hub (pip install -U hubwire)' if device_version > hub_version else 'Hubwire library on the board'}"
+            f"{hub_version}; update the {'hub (pip install -U ./host from a newer Hubwire checkout)' if device_version > hub_version else 'Hubwire library on the board'}"
         )
         self.device_version = device_version
         self.hub_version = hub_version
