@@ -20,6 +20,7 @@ from typing import Any, Dict, List
 import pytest
 
 import hubwire
+from hubwire.cache import descriptor_digest
 from hubwire.wire import messages as m
 from hubwire.wire.frame import Frame, FrameDecoder, encode_frame
 from hubwire.wire.values import codec_for
@@ -60,8 +61,9 @@ class ScriptedDevice:
     def send(self, t: int, seq: int, cid: int, payload: bytes = b"") -> None:
         os.write(self.master, encode_frame(t, seq, cid, payload))
 
-    def hello(self, flags: int) -> None:
-        h = m.Hello(1, flags | m.FLAG_DEVICE, NONCE, 32, 250, m.fnv1a32(DESCRIPTOR), len(DESCRIPTOR))
+    def hello(self, flags: int, digest: bool = True) -> None:
+        h = m.Hello(1, flags | m.FLAG_DEVICE, NONCE, 32, 250, m.fnv1a32(DESCRIPTOR), len(DESCRIPTOR),
+                    descriptor_digest(DESCRIPTOR) if digest else None)
         self.send(m.HELLO, 0, 0, h.pack())
 
     def answers(self) -> List[Frame]:
@@ -109,7 +111,7 @@ def test_hub_script(v: Dict[str, Any], tmp_path: Any) -> None:
             before = len(dev.answers())
             for f in v["device"]:
                 if f["type"] == m.HELLO:
-                    dev.hello(f["hello_flags"] & ~m.FLAG_DEVICE)
+                    dev.hello(f["hello_flags"] & ~m.FLAG_DEVICE, f.get("digest", True))
                 else:
                     dev.send(f["type"], f["seq"], f["id"], bytes.fromhex(f["payload"]))
             want, end = v["hub_answers"], time.monotonic() + DEADLINE

@@ -34,8 +34,11 @@ def hub_hello(nonce: int, version: int = 1) -> Dict[str, Any]:
     return fr(m.HELLO, 0, 0, m.Hello(version, 0, nonce, 255, 250).pack())
 
 
-def device_hello(reply: bool) -> Dict[str, Any]:
-    return {"type": m.HELLO, "seq": 0, "id": 0, "hello_flags": m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0)}
+def device_hello(reply: bool, digest: bool = True) -> Dict[str, Any]:
+    """A device hello, judged by its flags; ``digest``: whether it carries the descriptor digest
+    (hello bytes 16..31, which a device sends once it has heard a hub that takes them)."""
+    return {"type": m.HELLO, "seq": 0, "id": 0, "hello_flags": m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0),
+            "digest": digest}
 
 
 def beat(counter: int, since: int, dropped: int = 0) -> Dict[str, Any]:
@@ -154,6 +157,12 @@ def hub_scripts() -> List[Dict[str, Any]]:
          "kind": "hub_script", "rule": "8",
          "device": [device_hello(False)],
          "hub_answers": [{"type": m.HELLO, "seq": 0, "id": 0, "hello_flags": m.FLAG_REPLY}],
+         "app": ["link_lost", "link_restored"]},
+        {"name": "an unsolicited hello without the digest from a device that takes 32 bytes is answered with "
+                 "a hello with REPLY clear, and the device's answer (with the digest) is the one acted on",
+         "kind": "hub_script", "rule": "7.1",
+         "device": [device_hello(False, digest=False)],
+         "hub_answers": [{"type": m.HELLO, "seq": 0, "id": 0, "hello_flags": 0}],
          "app": ["link_lost", "link_restored"]},
     ]
 

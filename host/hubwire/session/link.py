@@ -99,6 +99,9 @@ class Link:
         self.probes = 0
         self._reopen_delay = REOPEN_FIRST
         self._hello_waiters: List["asyncio.Future[None]"] = []
+        #: a device announcement was answered by asking for its hello again (PROTOCOL.md 7.1): its
+        #: answer stands for the announcement
+        self._announce_pending = False
         self._hello_timer: Optional[asyncio.TimerHandle] = None
         self._hb_timer: Optional[asyncio.TimerHandle] = None
         self._loss_timer: Optional[asyncio.TimerHandle] = None
@@ -298,8 +301,10 @@ class Link:
                 # answering, so discovery can trust its cache (PROTOCOL.md 7.1). A device that
                 # predates the digest answers without one, and that answer is taken as it is.
                 self.send_hello(reply=False)
+                self._announce_pending = True
                 return None
             self.send_hello(reply=True)
+        announced, self._announce_pending = not h.is_reply or self._announce_pending, False
         prev, was_linked = self.device_hello, self.linked
         self.device_hello = h
         self._peer_hb_ms = h.heartbeat_ms or 250
@@ -321,7 +326,7 @@ class Link:
         if not was_linked:
             self._up()
             return HelloOutcome.RESTORED
-        if not h.is_reply:
+        if announced:
             self._up()
             return HelloOutcome.ANNOUNCE
         return HelloOutcome.SAME
