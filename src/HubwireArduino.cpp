@@ -18,6 +18,59 @@ size_t portWritable(Port& p) {
 uint32_t portMillis(Port&) { return ::millis(); }
 uint32_t portMicros(Port&) { return ::micros(); }
 
+// The board id (PROTOCOL 3.4): the chip's own unique id where the core offers one, so two boards
+// running one sketch keep distinct names on the hub; a build may supply its own (the emulator
+// does); an AVR has none, unless the sketch sets HUBWIRE_BOARD_ID_EEPROM to an EEPROM address
+// where a random id is kept (4 bytes, drawn on the first boot).
+#if defined(HUBWIRE_BOARD_ID_SOURCE)
+uint8_t HUBWIRE_BOARD_ID_SOURCE(uint8_t* out);
+uint8_t portBoardId(Port&, uint8_t* out) { return HUBWIRE_BOARD_ID_SOURCE(out); }
+#elif defined(ESP32)
+uint8_t portBoardId(Port&, uint8_t* out) {
+  uint64_t mac = ESP.getEfuseMac();  // the factory MAC, unique per chip
+  for (uint8_t i = 0; i < 6; ++i) out[i] = (uint8_t)(mac >> (8 * i));
+  return 6;
+}
+#elif defined(ARDUINO_ARCH_RP2040) && defined(__has_include) && __has_include(<pico/unique_id.h>)
+}  // namespace hubwire
+#include <pico/unique_id.h>
+namespace hubwire {
+uint8_t portBoardId(Port&, uint8_t* out) {
+  pico_unique_board_id_t id;  // the flash chip's 64-bit unique id
+  pico_get_unique_board_id(&id);
+  for (uint8_t i = 0; i < 8; ++i) out[i] = id.id[i];
+  return 8;
+}
+#elif defined(ARDUINO_ARCH_STM32)
+uint8_t portBoardId(Port&, uint8_t* out) {
+  uint32_t w[3] = {HAL_GetUIDw0(), HAL_GetUIDw1(), HAL_GetUIDw2()};  // the 96-bit device UID
+  for (uint8_t i = 0; i < 12; ++i) out[i] = (uint8_t)(w[i / 4] >> (8 * (i % 4)));
+  return 12;
+}
+#elif defined(__IMXRT1062__)
+uint8_t portBoardId(Port&, uint8_t* out) {
+  uint32_t w[2] = {HW_OCOTP_CFG0, HW_OCOTP_CFG1};  // the i.MX RT's 64-bit unique id fuses
+  for (uint8_t i = 0; i < 8; ++i) out[i] = (uint8_t)(w[i / 4] >> (8 * (i % 4)));
+  return 8;
+}
+#elif defined(__AVR__) && defined(HUBWIRE_BOARD_ID_EEPROM)
+}  // namespace hubwire
+#include <avr/eeprom.h>
+namespace hubwire {
+uint8_t portBoardId(Port&, uint8_t* out) {
+  uint8_t* at = (uint8_t*)(HUBWIRE_BOARD_ID_EEPROM);
+  eeprom_read_block(out, at, 4);
+  if ((out[0] & out[1] & out[2] & out[3]) == 0xFF) {  // a blank EEPROM: draw the id once
+    uint32_t id = ::micros() ^ ((uint32_t)::millis() << 16);  // when the hub first asks varies
+    for (uint8_t i = 0; i < 4; ++i) out[i] = (uint8_t)(id >> (8 * i));
+    eeprom_update_block(out, at, 4);
+  }
+  return 4;
+}
+#else
+uint8_t portBoardId(Port&, uint8_t*) { return 0; }
+#endif
+
 #if defined(__AVR__)
 // Survives a reset (not a power cycle, where RAM starts random anyway), so each boot differs.
 static uint32_t bootCounter __attribute__((section(".noinit")));

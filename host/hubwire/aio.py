@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import asyncio
 from collections import deque
-from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple
+from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple, cast
 
 from . import ops
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError, Timeout
+from .errors import HubwireError, NakError, Timeout
 from .ports import find_port
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
 from .session.events import EventSink
@@ -126,6 +126,18 @@ class AsyncDevice:
     def channel(self, name: str) -> Channel:
         """The :class:`Channel` called ``name`` (KeyError listing the channels if there is none)."""
         return ops.channel(self._core.descriptor, name)
+
+    async def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        """This board's id in hex (the chip's unique id, or the one its sketch keeps), which tells
+        two boards running one sketch apart; None when the board has none. Read once per boot."""
+        known = ops.cached_board_id(self._core)
+        if known is not ops.UNASKED:
+            return cast(Optional[str], known)
+        try:
+            a = await self._core.tx.transact(m.REQUEST, 0, b"", timeout=timeout, what="board id")
+        except NakError as e:
+            return ops.remember_board_id(self._core, None, e)
+        return ops.remember_board_id(self._core, a)
 
     async def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
         """Read a readable channel's current value."""

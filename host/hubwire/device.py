@@ -1,16 +1,17 @@
 """The user-facing synchronous :class:`Device` and :func:`connect`."""
 from __future__ import annotations
 
-from typing import Any, Callable, List, Optional, Tuple
+from typing import Any, Callable, List, Optional, Tuple, cast
 
 from . import ops
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError
+from .errors import HubwireError, NakError
 from .iterators import EventStream, Stream
 from .ports import KNOWN_USB_VIDS, find_port
 from .session import LinkHealth, Session
 from .text import clip, clip_list, show
 from .transport import Transport
+from .wire import messages as m
 
 __all__ = ["Device", "Stream", "EventStream", "connect", "find_port", "KNOWN_USB_VIDS", "channel_table"]
 
@@ -134,6 +135,19 @@ class Device:
     def channel(self, name: str) -> Channel:
         """The :class:`Channel` called ``name`` (KeyError listing the channels if there is none)."""
         return ops.channel(self._session.descriptor, name)
+
+    def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        """This board's id in hex (the chip's unique id, or the one its sketch keeps), which tells
+        two boards running one sketch apart; None when the board has none. Read once per boot."""
+        core = self._session.core
+        known = ops.cached_board_id(core)
+        if known is not ops.UNASKED:
+            return cast(Optional[str], known)
+        try:
+            a = self._session.transact(m.REQUEST, 0, b"", timeout=timeout, what="board id")
+        except NakError as e:
+            return ops.remember_board_id(core, None, e)
+        return ops.remember_board_id(core, a)
 
     def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
         """Read a readable channel's current value."""

@@ -5,13 +5,13 @@ from __future__ import annotations
 from typing import Any, Optional
 
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError
+from .errors import HubwireError, NakError
 from .text import clip, clip_list, show
 from .wire import messages as m
 from .wire.frame import Frame
 
 __all__ = ["channel", "readable", "write_payload", "call_payload", "call_result", "stream_channel",
-           "interval_for", "event_key"]
+           "interval_for", "event_key", "cached_board_id", "remember_board_id", "UNASKED"]
 
 
 def channel(desc: Optional[Descriptor], name: str) -> Channel:
@@ -85,3 +85,23 @@ def event_key(desc: Optional[Descriptor], name: str) -> Optional[str]:
     if not ch.is_event:
         raise HubwireError(f"channel {name!r} is not an event (access {ch.access!r})")
     return name
+
+
+UNASKED = object()  # cached_board_id(): not asked yet in this device session
+
+
+def cached_board_id(core: Any) -> Any:
+    """The board id read earlier from this boot of the device, or ``UNASKED`` when it must be read."""
+    if core.board_id is not None and core.board_id[0] == core.descriptor_nonce:
+        return core.board_id[1]
+    return UNASKED
+
+
+def remember_board_id(core: Any, answer: Optional[Frame], nak: Optional[NakError] = None) -> Optional[str]:
+    """Decode the answer to ``R`` id 0 (PROTOCOL 3.4): the id in hex, or None for a device that
+    has none (it answers NAK UNKNOWN_CHANNEL, as every device predating board ids does)."""
+    if nak is not None and nak.code != m.NakCode.UNKNOWN_CHANNEL:
+        raise nak
+    value = answer.payload.hex() if answer is not None and answer.type == m.RESPONSE and answer.payload else None
+    core.board_id = (core.descriptor_nonce, value)
+    return value

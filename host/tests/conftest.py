@@ -6,7 +6,7 @@ import selectors
 import signal
 import subprocess
 import time
-from typing import Iterator, Optional
+from typing import Iterator, Optional, Sequence
 
 import pytest
 
@@ -17,15 +17,16 @@ from hubwire.testing import emulator_binary, tapped
 class Emulator:
     """One emulator process playing the Rover on a pty linked at ``link``; restartable."""
 
-    def __init__(self, binary: str, link: str) -> None:
+    def __init__(self, binary: str, link: str, args: Sequence[str] = ()) -> None:
         self.binary = binary
         self.link = link
+        self.args = list(args)  # more emulator options, e.g. ["--board-id", "0a1b"]
         self.proc: Optional[subprocess.Popen] = None
         self.starts = 0
 
     def start(self, timeout: float = 10.0) -> None:
         assert self.proc is None, "emulator already running"
-        self.proc = subprocess.Popen([self.binary, "--link", self.link], stdout=subprocess.PIPE,
+        self.proc = subprocess.Popen([self.binary, "--link", self.link, *self.args], stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
         sel = selectors.DefaultSelector()
         assert self.proc.stdout is not None

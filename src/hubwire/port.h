@@ -24,6 +24,9 @@ size_t portWritable(Port& port);
 uint32_t portMillis(Port& port);
 // Microseconds, for entropy only (when the hub is first heard varies from boot to boot).
 uint32_t portMicros(Port& port);
+// This board's id, which tells two boards running the same sketch apart (PROTOCOL 3.4, `R` id 0):
+// writes 1..16 bytes to out and returns how many, or returns 0 when the board has none.
+uint8_t portBoardId(Port& port, uint8_t* out);
 
 }  // namespace hubwire
 

@@ -23,6 +23,7 @@ void hubwire::portWrite(Port&, const uint8_t*, size_t) {}
 size_t hubwire::portWritable(Port&) { return 0; }
 uint32_t hubwire::portMillis(Port&) { return 0; }
 uint32_t hubwire::portMicros(Port&) { return 0; }
+uint8_t hubwire::portBoardId(Port&, uint8_t*) { return 0; }
 
 #define CHECK(c)                                                         \
   do {                                                                   \

@@ -53,6 +53,7 @@ void hubwire::portWrite(Port& p, const uint8_t* data, size_t len) { p.out.insert
 size_t hubwire::portWritable(Port& p) { return p.room; }
 uint32_t hubwire::portMillis(Port& p) { return p.now; }
 uint32_t hubwire::portMicros(Port& p) { return p.now * 1000u; }
+uint8_t hubwire::portBoardId(Port&, uint8_t*) { return 0; }
 
 namespace {
 

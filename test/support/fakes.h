@@ -40,6 +40,7 @@ class Port {
   Port(test::FakeStream& s, test::FakeClock& c) : stream(s), clock(c) {}
   test::FakeStream& stream;
   test::FakeClock& clock;
+  test::Bytes boardId;  // what portBoardId() reports (empty: the board has no id)
 };
 
 }  // namespace hubwire

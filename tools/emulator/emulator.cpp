@@ -2,8 +2,10 @@
 // hub can be tested against the real library code without a board.
 //
 //   hubwire-emulator --link /tmp/rover     prints "READY /tmp/rover", runs until SIGTERM/SIGINT
+//   hubwire-emulator --link /tmp/rover --board-id 0a1b   the board id it reports (1..16 bytes, hex)
 //
 // SIGUSR2 presses or releases the bumper (pin 2), as a finger would on the real robot.
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -11,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <sys/stat.h>
+#include <string.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
@@ -82,7 +85,30 @@ uint32_t emulatorNonce() {  // a fresh process is a fresh boot
   if (fd >= 0) close(fd);
   return n ^ (uint32_t)getpid();
 }
+
+uint8_t boardId[16], boardIdLen;  // --board-id: none unless given, like an AVR
+uint8_t emulatorBoardId(uint8_t* out) {
+  memcpy(out, boardId, boardIdLen);
+  return boardIdLen;
+}
 }  // namespace hubwire
+
+namespace {
+// "--board-id 0a1b2c": 1..16 bytes in hex.
+bool parseBoardId(const char* hex) {
+  size_t n = strlen(hex);
+  if (n == 0 || n % 2 || n > 32) return false;
+  for (size_t i = 0; i < n / 2; ++i) {
+    unsigned v;
+    if (sscanf(hex + 2 * i, "%2x", &v) != 1 || !isxdigit((unsigned char)hex[2 * i]) ||
+        !isxdigit((unsigned char)hex[2 * i + 1]))
+      return false;
+    hubwire::boardId[i] = (uint8_t)v;
+  }
+  hubwire::boardIdLen = (uint8_t)(n / 2);
+  return true;
+}
+}  // namespace
 
 uint32_t millis() { return (uint32_t)(nowUs() / 1000); }
 uint32_t micros() { return (uint32_t)nowUs(); }
@@ -112,13 +138,15 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--link") && i + 1 < argc) {
       link = argv[++i];
+    } else if (!strcmp(argv[i], "--board-id") && i + 1 < argc && parseBoardId(argv[i + 1])) {
+      ++i;
     } else {
-      fprintf(stderr, "usage: %s --link PATH\n", argv[0]);
+      fprintf(stderr, "usage: %s --link PATH [--board-id HEX]\n", argv[0]);
       return 2;
     }
   }
   if (!link) {
-    fprintf(stderr, "usage: %s --link PATH\n", argv[0]);
+    fprintf(stderr, "usage: %s --link PATH [--board-id HEX]\n", argv[0]);
     return 2;
   }
   clock_gettime(CLOCK_MONOTONIC, &started);

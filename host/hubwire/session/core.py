@@ -11,7 +11,7 @@ import asyncio
 import logging
 import threading
 import time
-from typing import Any, Callable, List, Optional
+from typing import Any, Callable, List, Optional, Tuple
 
 from ..cache import DescriptorCache
 from ..descriptor import Descriptor
@@ -56,6 +56,8 @@ class SessionCore:
         self.fatal: Optional[BaseException] = None
         self.descriptor: Optional[Descriptor] = None
         self.descriptor_nonce: Optional[int] = None
+        # (device nonce, board id) once asked: the id a device reports is read once per boot
+        self.board_id: Optional[Tuple[Optional[int], Optional[str]]] = None
         self.discovery_error: Optional[BaseException] = None
         self.progress_at = 0.0
         self.link_lost_cbs: List[Callable[[], Any]] = []

@@ -247,7 +247,13 @@ void Session::onChunk(const Frame& f) {
 
 void Session::onRequest(const Frame& f) {
   ChannelInfo ch;
-  if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
+  if (!find(f.id, ch)) {
+    // Id 0 is the link itself: reading it asks for the board id (at most 16 bytes, which every
+    // hub accepts), where the board has one.
+    uint8_t n = f.id == 0 && f.len == 0 ? portBoardId(port_, tx_.payload()) : 0;
+    if (n) return reply(kMsgResponse, f, n);
+    return sendNak(f, kErrUnknownChannel);
+  }
   if (!(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
   // Not sent at all when the hub could not take it (its hello said how much it accepts).
   if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
