@@ -29,6 +29,9 @@ uno-firmware:
 	@for e in $(EXAMPLES); do \
 	  bash tools/arduino/build-sketch.sh examples/$$e arduino:avr:uno $(BUILD)/uno/$$e >/dev/null || exit 1; \
 	done
+	@# Minimal again, keeping a board id in EEPROM (test_board_id_on_uno.py)
+	@EXTRA_FLAGS=-DHUBWIRE_BOARD_ID_EEPROM=16 bash tools/arduino/build-sketch.sh examples/Minimal arduino:avr:uno \
+	  $(BUILD)/uno/MinimalBoardId >/dev/null
 
 test: setup
 	$(MAKE) test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
