@@ -20,13 +20,13 @@ import logging
 import os
 import time
 from dataclasses import dataclass
-from typing import Any, AsyncGenerator, Callable, Dict, List, Optional, Set
+from typing import Any, Callable, Dict, List, Optional, Set
 
 from ..aio import AsyncDevice, connect
 from ..errors import HubwireError, LinkLost
 from .ports import PortInfo, PortScanner
 
-__all__ = ["Board", "Fleet", "UnknownBoard"]
+__all__ = ["Board", "Fleet", "Changes", "UnknownBoard"]
 
 log = logging.getLogger("hubwire.service")
 
@@ -60,6 +60,30 @@ class Board:
     last_port: Optional[str] = None
     #: events the service received from it (each one is handed to every client listening then)
     events: int = 0
+
+
+class Changes:
+    """The async iterator :meth:`Fleet.changes` returns (registered at once, so nothing between the
+    call and the first ``await`` is missed)."""
+
+    def __init__(self, watchers: "Set[asyncio.Queue[Board]]") -> None:
+        self._watchers = watchers
+        self._q: "asyncio.Queue[Board]" = asyncio.Queue()
+        watchers.add(self._q)
+
+    def __aiter__(self) -> "Changes":
+        return self
+
+    async def __anext__(self) -> Board:
+        if self._q not in self._watchers:
+            raise StopAsyncIteration
+        return await self._q.get()
+
+    async def aclose(self) -> None:
+        self._watchers.discard(self._q)
+
+    def __del__(self) -> None:
+        self._watchers.discard(self._q)
 
 
 @dataclass
@@ -106,15 +130,10 @@ class Fleet:
             raise UnknownBoard(self._unknown(key))
         return dataclasses.replace(b)
 
-    async def changes(self) -> AsyncGenerator[Board, None]:
-        """Yields a board snapshot each time one is added, changes state, or changes device/port."""
-        q: "asyncio.Queue[Board]" = asyncio.Queue()
-        self._watchers.add(q)
-        try:
-            while True:
-                yield await q.get()
-        finally:
-            self._watchers.discard(q)
+    def changes(self) -> "Changes":
+        """Yields a board snapshot each time one is added, changes state, or changes device/port:
+        every change from this call on (``async for``; ``aclose()`` or leaving the loop ends it)."""
+        return Changes(self._watchers)
 
     # ------------------------------------------------------------------------------- additions
 

@@ -7,7 +7,7 @@ import inspect
 import logging
 import signal
 import sys
-from typing import Any, List, Optional
+from typing import Any, Callable, List, Optional, Tuple
 
 from .fleet import Fleet
 from .protocol import default_serve_socket
@@ -40,36 +40,45 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
     s.set_defaults(fn=cmd_list)
 
 
-async def serve(fleet: Fleet, socket: str, mqtt: Optional[str] = None, ready: Any = None) -> None:
-    """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`)."""
+async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] = None,
+                mqtt: Optional[str] = None, ready: Any = None) -> None:
+    """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`);
+    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``."""
     server = Server(fleet, socket)
     await server.start()
     await fleet.start()
-    bridge: Optional["asyncio.Task[Any]"] = None
+    task: Optional["asyncio.Future[Any]"] = None
     try:
-        if mqtt is not None:
-            bridge = _start_mqtt(fleet, mqtt)
+        if bridge is not None and mqtt is not None:
+            host, port = broker_address(mqtt)
+            res = bridge(fleet, host=host, port=port)
+            task = asyncio.ensure_future(res) if inspect.isawaitable(res) else None
         if ready is not None:
             ready()
         await asyncio.Event().wait()
     finally:
-        if bridge is not None:
-            bridge.cancel()
+        if task is not None:
+            task.cancel()
         await server.close()
         await fleet.close()
 
 
-def _start_mqtt(fleet: Fleet, where: str) -> Optional["asyncio.Task[Any]"]:
+def broker_address(where: str) -> Tuple[str, int]:
+    """``HOST:PORT`` (or ``HOST``: port 1883)."""
     host, _, port = where.rpartition(":")
     if not host or not port.isdigit():
-        host, port = where, "1883"
+        return where, 1883
+    return host, int(port)
+
+
+def mqtt_bridge() -> Callable[..., Any]:
+    """``hubwire.service.mqtt.run_bridge``, or SystemExit saying it is missing."""
     try:
-        from . import mqtt  # type: ignore[attr-defined,unused-ignore]
+        from .mqtt import run_bridge  # type: ignore[import-not-found,unused-ignore]
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --mqtt needs the MQTT bridge (hubwire.service.mqtt), which this "
                          f"installation lacks ({e})") from None
-    res = mqtt.run_bridge(fleet, host=host, port=int(port))
-    return asyncio.ensure_future(res) if inspect.isawaitable(res) else None
+    return run_bridge  # type: ignore[no-any-return,unused-ignore]
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -77,6 +86,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
                         format="hubwire serve: %(message)s" if not args.verbose else "%(asctime)s %(message)s")
     logging.getLogger("hubwire.service").setLevel(logging.INFO)
     sock = args.socket or default_serve_socket()
+    bridge = mqtt_bridge() if args.mqtt else None
     fleet = Fleet(ports=args.ports, globs=args.watch, usb=not args.no_usb, connect_timeout=args.timeout,
                   poll_interval=args.poll)
 
@@ -85,7 +95,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
-        await serve(fleet, sock, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True))
+        await serve(fleet, sock, bridge, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True))
 
     try:
         asyncio.run(main())

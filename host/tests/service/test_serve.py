@@ -53,6 +53,8 @@ def test_python_connect_by_name_and_by_the_port_the_service_owns(serve: Serve,
     with hubwire.connect(emu.link) as same:
         assert same.url == "service:rover"
         assert same.left == 0.25
+    with hubwire.connect() as auto:  # no port: the one board the service has
+        assert auto.url == "service:rover"
     assert serve.board("rover")["attached"] == 1  # type: ignore[index]
 
 
@@ -172,3 +174,49 @@ def test_protocol_errors_are_answered(serve: Serve, emulators: Callable[[str], E
     assert by_id[2]["error"] == "InvalidValue"  # out of range: refused before it reaches the board
     assert by_id[3] == {"id": 3, "ok": True, "value": 0.0, "raw": "00000000"}
     assert os.path.exists(serve.socket)
+
+
+def test_mqtt_hook_hands_the_fleet_to_the_bridge(tmp_path: Any) -> None:
+    """`serve --mqtt HOST:PORT` calls hubwire.service.mqtt.run_bridge(fleet, host=, port=) on the
+    service's loop and cancels what it returned when the service stops."""
+    from hubwire.service.fleet import Fleet
+    from hubwire.service.main import serve as run_serve
+
+    calls: list = []
+
+    async def bridge(fleet: Fleet, *, host: str, port: int) -> None:
+        calls.append((fleet, host, port))
+        try:
+            await asyncio.Event().wait()
+        except asyncio.CancelledError:
+            calls.append("cancelled")
+            raise
+
+    async def main() -> None:
+        fleet = Fleet(usb=False)
+        up = asyncio.Event()
+        task = asyncio.ensure_future(run_serve(fleet, str(tmp_path / "s.sock"), bridge, "broker.lan:1884",
+                                               ready=up.set))
+        await asyncio.wait_for(up.wait(), 10)
+        await asyncio.sleep(0)
+        assert calls == [(fleet, "broker.lan", 1884)]
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)
+        assert calls[-1] == "cancelled"
+        assert not os.path.exists(tmp_path / "s.sock")
+    asyncio.run(main())
+
+
+def test_mqtt_without_the_bridge_says_so(tmp_path: Any) -> None:
+    import importlib.util
+    import subprocess
+    import sys
+
+    import pytest
+
+    if importlib.util.find_spec("hubwire.service.mqtt") is not None:
+        pytest.skip("this installation has the MQTT bridge")
+    r = subprocess.run([sys.executable, "-m", "hubwire", "serve", "--no-usb", "--mqtt", "localhost:1883",
+                        "--socket", str(tmp_path / "s.sock")], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1 and "hubwire.service.mqtt" in r.stderr
+    assert not os.path.exists(tmp_path / "s.sock")
