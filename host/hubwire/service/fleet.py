@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Set
 
 from ..aio import AsyncDevice, connect
+from ..descriptor import Descriptor
 from ..errors import HubwireError, LinkLost
 from .ports import PortInfo, PortScanner
 
@@ -116,6 +117,8 @@ class Fleet:
         self._udev: Any = None
         self._closed = False
         self._counts: Dict[str, int] = {}
+        #: each board's last descriptor (kept while it is unplugged)
+        self._descriptors: Dict[str, Descriptor] = {}
 
     # --------------------------------------------------------------------------- the FLEET.md API
 
@@ -180,6 +183,15 @@ class Fleet:
                     pass
         finally:
             await changes.aclose()
+
+    def descriptor(self, key: str) -> Descriptor:
+        """The board's descriptor: its device's, or the last one it had while it is unplugged."""
+        b = self._boards.get(key)
+        if b is None:
+            raise UnknownBoard(self._unknown(key))
+        if b.device is not None and b.device.core.descriptor is not None:
+            return b.device.descriptor
+        return self._descriptors[key]
 
     def _unknown(self, what: str) -> str:
         known = ", ".join(f"{b.key} ({b.state})" for b in self._boards.values()) or "none yet"
@@ -279,6 +291,7 @@ class Fleet:
         board.device = dev
         board.attached += 1
         board.state = dev.state
+        self._descriptors[board.key] = dev.descriptor
         self._by_port[real] = board
         # the service always listens, so an event nobody else hears is counted, not kept for the
         # next client (who sees the events from its subscription on)
@@ -315,6 +328,8 @@ class Fleet:
             # new firmware with another name on the same port: another board now
             self._detach(real)
             return
+        if d is not None:
+            self._descriptors[board.key] = d
         self._refresh(board)
 
     def _refresh(self, board: Board) -> None:

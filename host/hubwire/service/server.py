@@ -131,8 +131,7 @@ class _Client:
 
     async def op_describe(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         b = self.fleet.resolve(str(msg.get("board", "")))
-        dev = b.device if b.device is not None else await self.fleet.wait_device(b.key, _timeout(msg))
-        return {"board": board_json(b), "descriptor": dev.descriptor.raw.decode("utf-8")}
+        return {"board": board_json(b), "descriptor": self.fleet.descriptor(b.key).raw.decode("utf-8")}
 
     async def op_read(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         dev = self._device(msg)

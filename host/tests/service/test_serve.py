@@ -9,6 +9,8 @@ import os
 import socket
 from typing import Any, Callable
 
+import pytest
+
 import hubwire
 import hubwire.aio
 from conftest import Emulator
@@ -104,16 +106,25 @@ def test_unplug_and_replug_on_a_new_port(serve: Serve, emulators: Callable[[str]
     first = emulators("a")
     serve.wait_state("rover", "ready", first.link)
     with hubwire.connect("rover") as rover:
+        lost: list = []
+        restored: list = []
+        rover.on("link_lost", lambda: lost.append(1))
+        rover.on("link_restored", lambda: restored.append(1))
         samples = rover.stream("left", hz=20, meta=True)
         assert samples.get(10) is not None
         first.stop()  # unplugged ...
         assert serve.wait_state("rover", "unplugged")["port"] is None
+        with hubwire.connect("rover") as meanwhile:  # known while away, its calls fail fast
+            assert meanwhile.session.board["state"] == "unplugged"  # type: ignore[attr-defined]
+            with pytest.raises(hubwire.LinkLost, match="unplugged"):
+                meanwhile.read("left")
         second = emulators("b")  # ... and back on another port
         back = serve.wait_state("rover", "ready", second.link)
         assert back["attached"] == 2 and back["key"] == "rover"
         assert rover.left == 0.0  # the same client object reaches the board on its new port
         rover.left = 0.75
         assert rover.left == 0.75
+        wait_for(lambda: (len(lost), len(restored)) == (1, 1), what="link lost and restored, once each")
         s = samples.get(10)  # the stream rode through, its first sample marked with the outage
         while s is not None and s.value != 0.75 and s.gap == 0:
             s = samples.get(10)
@@ -211,8 +222,6 @@ def test_mqtt_without_the_bridge_says_so(tmp_path: Any) -> None:
     import importlib.util
     import subprocess
     import sys
-
-    import pytest
 
     if importlib.util.find_spec("hubwire.service.mqtt") is not None:
         pytest.skip("this installation has the MQTT bridge")
