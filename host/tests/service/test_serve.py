@@ -229,3 +229,28 @@ def test_mqtt_without_the_bridge_says_so(tmp_path: Any) -> None:
                         "--socket", str(tmp_path / "s.sock")], capture_output=True, text=True, timeout=60)
     assert r.returncode == 1 and "hubwire.service.mqtt" in r.stderr
     assert not os.path.exists(tmp_path / "s.sock")
+
+
+def test_watch_through_the_service_sees_events_another_client_caused(serve: Serve,
+                                                                     emulators: Callable[[str], Emulator]) -> None:
+    import subprocess
+    import sys
+
+    emulators("a")
+    serve.wait_state("rover", "ready")
+    watch = subprocess.Popen([sys.executable, "-m", "hubwire", "watch", "rover", "--json", "--duration", "30"],
+                             env=serve.env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert watch.stdout is not None
+        first = json.loads(watch.stdout.readline())  # watching: its event subscription is open
+        assert first["link"]["state"] == "ready" and first["values"]["failsafes"] == 0
+        assert serve.cli("call", "rover", "selftest", "2").stdout.strip() == "2"
+        events = []
+        while len(events) < 2:
+            line = json.loads(watch.stdout.readline())
+            if "event" in line:
+                events.append((line["event"], line["value"]))
+        assert events == [("bumper", True), ("bumper", False)]
+    finally:
+        watch.terminate()
+        watch.wait(10)
