@@ -25,6 +25,7 @@ from typing import Any, Callable, Dict, List, Optional, Set
 from ..aio import AsyncDevice, connect
 from ..descriptor import Descriptor
 from ..errors import HubwireError, LinkLost
+from ..transport import SerialTransport
 from .ports import PortInfo, PortScanner
 
 __all__ = ["Board", "Fleet", "Changes", "UnknownBoard"]
@@ -116,7 +117,6 @@ class Fleet:
         self._task: Optional["asyncio.Task[None]"] = None
         self._udev: Any = None
         self._closed = False
-        self._counts: Dict[str, int] = {}
         #: each board's last descriptor (kept while it is unplugged)
         self._descriptors: Dict[str, Descriptor] = {}
 
@@ -268,7 +268,9 @@ class Fleet:
     async def _attach(self, real: str, info: PortInfo) -> None:
         a = self._attempts[real]
         try:
-            dev = await connect(info.path, timeout=self.connect_timeout, cache_dir=self.cache_dir)
+            # a transport of its own: the port itself, never routed through a service (this one)
+            dev = await connect(transport=SerialTransport(info.path), timeout=self.connect_timeout,
+                                cache_dir=self.cache_dir)
         except asyncio.CancelledError:
             raise
         except Exception as e:  # noqa: BLE001 - any port that is no Hubwire board
@@ -308,14 +310,11 @@ class Fleet:
             return free[0]
         key = name
         if any(b.name == name for b in self._boards.values()):
-            if board_id is not None:
-                key = f"{name}-{board_id}"
-            else:
-                n = self._counts.get(name, 1)
-                while f"{name}-{n}" in self._boards or n == 1:
-                    n += 1
-                self._counts[name] = n
-                key = f"{name}-{n}"
+            key = f"{name}-{board_id}" if board_id is not None else name
+            n = 1
+            while key in self._boards:  # (two boards that claim one id get a number too)
+                n += 1
+                key = f"{name}-{n}" if board_id is None else f"{name}-{board_id}-{n}"
         board = Board(key=key, name=name, board_id=board_id, port=None, state="connecting", device=None)
         self._boards[key] = board
         return board
