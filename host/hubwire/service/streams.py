@@ -22,7 +22,6 @@ def ended(msg: Dict[str, Any]) -> BaseException:
     return StreamEnded(text) if kind == "StreamEnded" else LinkLost(text)
 
 
-
 class _Closed(Exception):
     """The subscription ended (the service went away)."""
 
