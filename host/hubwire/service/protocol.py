@@ -76,8 +76,10 @@ def error_json(exc: BaseException) -> Dict[str, Any]:
     from ..diagnose import error_type
 
     kind = getattr(exc, "kind", None)
-    out: Dict[str, Any] = {"ok": False, "error": kind if isinstance(kind, str) else error_type(exc),
-                           "message": str(exc)}
+    if not isinstance(kind, str):
+        kind = "UnknownChannel" if isinstance(exc, KeyError) else error_type(exc)
+    text = str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)
+    out: Dict[str, Any] = {"ok": False, "error": kind, "message": text}
     if isinstance(exc, NakError):
         out.update(nak=exc.error, code=exc.code, channel=exc.channel)
     elif isinstance(exc, InvalidValue):

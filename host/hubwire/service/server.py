@@ -23,6 +23,9 @@ __all__ = ["Server"]
 
 log = logging.getLogger("hubwire.service")
 
+#: bytes waiting for a client before it is taken for gone and disconnected
+MAX_BACKLOG = 4 << 20
+
 
 class Server:
     """Listens on ``path`` (a Unix socket, mode 0660) and serves ``fleet`` to every client."""
@@ -70,8 +73,15 @@ class _Client:
         self.tasks: "set[asyncio.Task[None]]" = set()
 
     def send(self, obj: Dict[str, Any]) -> None:
-        if not self.writer.is_closing():
-            self.writer.write(encode(obj))
+        if self.writer.is_closing():
+            return
+        if self.writer.transport.get_write_buffer_size() > MAX_BACKLOG:
+            # a client that stopped reading would make the service hold every sample for it
+            log.warning("hubwire serve: a client stopped reading (%d bytes waiting); disconnecting it",
+                        self.writer.transport.get_write_buffer_size())
+            self.close()
+            return
+        self.writer.write(encode(obj))
 
     def close(self) -> None:
         for t in list(self.subs.values()) + list(self.tasks):

@@ -175,15 +175,16 @@ def test_protocol_errors_are_answered(serve: Serve, emulators: Callable[[str], E
         assert hello["service"] == "hubwire" and hello["protocol"] == 1
         for line in (b"not json\n", b'{"id": 1, "op": "fly"}\n', b'{"id": 2, "op": "write", "board": "rover", '
                      b'"channel": "left", "value": 7}\n', b'{"id": 3, "op": "read", "board": "rover", '
-                     b'"channel": "left"}\n'):
+                     b'"channel": "left"}\n', b'{"id": 4, "op": "read", "board": "rover", "channel": "wings"}\n'):
             f.write(line)
             f.flush()
-        answers = [json.loads(f.readline()) for _ in range(4)]
+        answers = [json.loads(f.readline()) for _ in range(5)]
     by_id = {a.get("id"): a for a in answers}
     assert by_id[None]["error"] == "Usage"
     assert not by_id[1]["ok"] and "read" in by_id[1]["message"]
     assert by_id[2]["error"] == "InvalidValue"  # out of range: refused before it reaches the board
     assert by_id[3] == {"id": 3, "ok": True, "value": 0.0, "raw": "00000000"}
+    assert by_id[4]["error"] == "UnknownChannel" and by_id[4]["message"].startswith("rover has no channel 'wings'")
     assert os.path.exists(serve.socket)
 
 
