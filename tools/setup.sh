@@ -34,6 +34,6 @@ fi
 stamp=.venv/.hubwire-installed
 if [ ! -f "$stamp" ] || [ host/pyproject.toml -nt "$stamp" ]; then
   .venv/bin/pip install -q --upgrade pip
-  .venv/bin/pip install -q -e "host[test]" platformio
+  .venv/bin/pip install -q -e "host[test,service]" platformio
   touch "$stamp"
 fi

@@ -26,12 +26,11 @@ from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optio
 from . import ops
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, NakError, Timeout
-from .ports import find_port
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
 from .session.events import EventSink
 from .session.runner import LoopDispatcher
 from .text import clip
-from .transport import SerialTransport, Transport
+from .transport import Transport
 from .wire import messages as m
 
 __all__ = ["connect", "AsyncDevice", "AsyncStream", "AsyncEventStream"]
@@ -47,8 +46,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     ``serial_kwargs``.
     """
     if transport is None:
-        transport = SerialTransport(url if url is not None else find_port(), baudrate,
-                                    **kwargs.pop("serial_kwargs", None) or {})
+        from .service.route import RoutedConnecting  # through hubwire serve where it applies
+
+        return RoutedConnecting(url, baudrate, timeout, kwargs)
     return _Connecting(transport, timeout, kwargs)
 
 

@@ -1,4 +1,5 @@
-"""``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``)."""
+"""``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``); serve and list
+(:mod:`hubwire.service.main`)."""
 from __future__ import annotations
 
 import argparse
@@ -68,7 +69,9 @@ def cmd_set(args: argparse.Namespace) -> int:
         ch = channel(dev, args.channel, "w")
         value = ch.codec.parse_text(args.value)
         dev.write(args.channel, value)
-        warning = None if ch.failsafe is None else diagnose.failsafe_warning(
+        # through hubwire serve the board stays linked after the command: no failsafe to warn of
+        held = getattr(dev.session, "remote", None) is not None
+        warning = None if ch.failsafe is None or held else diagnose.failsafe_warning(
             ch.name, fmt_value(ch.failsafe), fmt_value(ch.codec.check(value)))
         if args.json:
             out = {"channel": args.channel, "value": jsonable(ch.codec.check(value)), "ok": True}
@@ -125,7 +128,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"hubwire {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    url_help = "serial port or pyserial URL (/dev/ttyACM0, COM3, socket://host:port); 'auto' finds the board"
+    url_help = ("serial port or pyserial URL (/dev/ttyACM0, COM3, socket://host:port), or a board's name when "
+                "hubwire serve runs; 'auto' finds the board")
     s = sub.add_parser("ports", parents=[out], help="list serial ports, marking known boards")
     s.set_defaults(fn=cmd_ports)
     s = sub.add_parser("info", parents=[common], help="show the device and its channels")
@@ -157,6 +161,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wait for the board to appear and to come back when it goes away (default: end with "
                         "an error once it has been gone for --timeout seconds)")
     s.set_defaults(fn=cmd_watch)
+    from .service.main import add_commands
+
+    add_commands(sub, out)
     return p
 
 

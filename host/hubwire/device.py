@@ -26,11 +26,20 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     :class:`hubwire.session.Session` (``heartbeat_ms``, ``retry_timeout``, ``tries``, ``cache_dir``,
     ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``).
 
+    With ``hubwire serve`` running, a board name (``connect("rover")``), a port the service owns, or
+    no URL with one board served reach the board through the service (docs/SERVICE.md).
+
     Use it as a context manager to close the link at the end::
 
         with hubwire.connect("/dev/ttyACM0") as rover:
             rover.left = 0.5
     """
+    if transport is None:
+        from .service.route import open_routed  # a board name, or a port hubwire serve owns
+
+        remote = open_routed(url, timeout, kwargs)
+        if remote is not None:
+            return Device(remote)
     if url is None and transport is None:
         url = find_port()
     session = Session(url, baudrate, connect_timeout=timeout, transport=transport, **kwargs)

@@ -45,6 +45,8 @@ ERROR_TYPES: Dict[str, str] = {
     "PortError": "the port could not be opened for another reason",
     "DescriptorError": "the device's descriptor is not valid",
     "ProtocolVersionError": "the device speaks another Hubwire protocol version",
+    "UnknownBoard": "hubwire serve has no board of that name (the message lists the boards it has)",
+    "ServiceNotRunning": "a board was named but hubwire serve is not running (the message says how to start it)",
     "Usage": "the command line is not valid (exit status 2)",
     "Error": "any other error",
 }

@@ -1,0 +1,127 @@
+"""``hubwire serve`` and ``hubwire list``: the service's command line."""
+from __future__ import annotations
+
+import argparse
+import asyncio
+import inspect
+import logging
+import signal
+import sys
+from typing import Any, Callable, List, Optional, Tuple
+
+from .fleet import Fleet
+from .protocol import default_serve_socket
+from .server import Server
+
+__all__ = ["add_commands", "serve", "cmd_serve", "cmd_list"]
+
+log = logging.getLogger("hubwire.service")
+
+
+def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
+    """The ``serve`` and ``list`` subcommands (``out`` gives ``--json``)."""
+    s = sub.add_parser("serve", help="own every board and serve them to other programs (docs/SERVICE.md)",
+                       description="Find every attached board (USB hotplug), keep each linked and serve them by "
+                                   "name on a local socket to `hubwire get/set/call/watch NAME` and "
+                                   "hubwire.connect(\"NAME\").")
+    s.add_argument("ports", nargs="*", metavar="PORT",
+                   help="also serve these ports or URLs (ptys, socket://...), re-opened whenever they come back")
+    s.add_argument("--watch", action="append", default=[], metavar="GLOB",
+                   help="serve every port matching this glob as it appears ('/dev/serial/by-id/*', '/tmp/boards/*')")
+    s.add_argument("--no-usb", action="store_true", help="do not look for USB boards (only PORTs and --watch)")
+    s.add_argument("--socket", default=None, help=f"the socket clients use (default {default_serve_socket()})")
+    s.add_argument("--timeout", type=float, default=5.0, help="connect deadline per board in seconds (default 5)")
+    s.add_argument("--poll", type=float, default=0.5, help="seconds between port scans (default 0.5)")
+    s.add_argument("--mqtt", metavar="HOST:PORT", default=None,
+                   help="also run the MQTT bridge to this broker (hubwire.service.mqtt)")
+    s.add_argument("-v", "--verbose", action="store_true", help="log every board and link change")
+    s.set_defaults(fn=cmd_serve)
+    s = sub.add_parser("list", parents=[out], help="boards known to the running hubwire serve")
+    s.set_defaults(fn=cmd_list)
+
+
+async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] = None,
+                mqtt: Optional[str] = None, ready: Any = None) -> None:
+    """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`);
+    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``."""
+    server = Server(fleet, socket)
+    await server.start()
+    await fleet.start()
+    task: Optional["asyncio.Future[Any]"] = None
+    try:
+        if bridge is not None and mqtt is not None:
+            host, port = broker_address(mqtt)
+            res = bridge(fleet, host=host, port=port)
+            task = asyncio.ensure_future(res) if inspect.isawaitable(res) else None
+        if ready is not None:
+            ready()
+        await asyncio.Event().wait()
+    finally:
+        if task is not None:
+            task.cancel()
+        await server.close()
+        await fleet.close()
+
+
+def broker_address(where: str) -> Tuple[str, int]:
+    """``HOST:PORT`` (or ``HOST``: port 1883)."""
+    host, _, port = where.rpartition(":")
+    if not host or not port.isdigit():
+        return where, 1883
+    return host, int(port)
+
+
+def mqtt_bridge() -> Callable[..., Any]:
+    """``hubwire.service.mqtt.run_bridge``, or SystemExit saying it is missing."""
+    try:
+        from .mqtt import run_bridge  # type: ignore[import-not-found,unused-ignore]
+    except ImportError as e:
+        raise SystemExit(f"hubwire serve: --mqtt needs the MQTT bridge (hubwire.service.mqtt), which this "
+                         f"installation lacks ({e})") from None
+    return run_bridge  # type: ignore[no-any-return,unused-ignore]
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="hubwire serve: %(message)s" if not args.verbose else "%(asctime)s %(message)s")
+    logging.getLogger("hubwire.service").setLevel(logging.INFO)
+    sock = args.socket or default_serve_socket()
+    bridge = mqtt_bridge() if args.mqtt else None
+    fleet = Fleet(ports=args.ports, globs=args.watch, usb=not args.no_usb, connect_timeout=args.timeout,
+                  poll_interval=args.poll)
+
+    async def main() -> None:
+        task = asyncio.current_task()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
+        await serve(fleet, sock, bridge, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True))
+
+    try:
+        asyncio.run(main())
+    except asyncio.CancelledError:
+        pass
+    return 0
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    from ..cli_support import print_json
+    from .client import Connection
+
+    async def boards() -> List[Any]:
+        conn = await Connection.open()
+        try:
+            return list((await conn.request("list"))["boards"])
+        finally:
+            await conn.close()
+
+    rows = asyncio.run(boards())
+    if args.json:
+        print_json(rows)
+        return 0
+    if not rows:
+        print("hubwire serve runs, and has found no board yet")
+    for b in rows:
+        sys.stdout.write(f"{b['key']}  {b['name']}  id {b['board_id'] or '-'}  {b['state']}"
+                         f"{'  on ' + b['port'] if b['port'] else ''}\n")
+    return 0

@@ -1,0 +1,142 @@
+"""Fixtures: `hubwire serve` as its own process, watching a directory where emulated boards and
+simulated Unos put their pty links (a board "unplugged" is a process stopped, "replugged" one
+started again on a new link in the same directory)."""
+from __future__ import annotations
+
+import json
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import time
+from typing import Any, Callable, Dict, Iterator, List, Optional
+
+import pytest
+
+from conftest import Emulator
+from hubwire.testing import emulator_binary
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+HOST = os.path.dirname(os.path.dirname(HERE))
+
+
+def wait_for(predicate: Callable[[], Any], timeout: float = 15.0, what: str = "condition") -> Any:
+    """Poll ``predicate`` until it returns something truthy (returned); AssertionError after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while True:
+        v = predicate()
+        if v:
+            return v
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.05)
+
+
+class Serve:
+    """One `hubwire serve` process serving every port that appears in ``boards_dir``."""
+
+    def __init__(self, boards_dir: str, socket: str, env: Dict[str, str], log: str) -> None:
+        self.boards_dir = boards_dir
+        self.socket = socket
+        self.env = env
+        self.log = log
+        self.proc: Optional[subprocess.Popen] = None
+
+    def start(self, timeout: float = 20.0) -> None:
+        argv = [sys.executable, "-m", "hubwire", "serve", "--no-usb", "--watch", os.path.join(self.boards_dir, "*"),
+                "--socket", self.socket, "--poll", "0.2", "-v"]
+        with open(self.log, "ab") as err:
+            self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL,
+                                         env=self.env)
+        sel = selectors.DefaultSelector()
+        assert self.proc.stdout is not None
+        sel.register(self.proc.stdout, selectors.EVENT_READ)
+        ready = sel.select(timeout)
+        sel.close()
+        line = self.proc.stdout.readline().decode().strip() if ready else ""
+        assert line == f"READY {self.socket}", f"hubwire serve said {line!r}; its log:\n{self.log_text()}"
+
+    def stop(self) -> int:
+        p, self.proc = self.proc, None
+        if p is None:
+            return 0
+        p.send_signal(signal.SIGTERM)
+        try:
+            return p.wait(10)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait(5)
+            return -9
+
+    def log_text(self) -> str:
+        try:
+            with open(self.log, encoding="utf-8", errors="replace") as fh:
+                return fh.read()
+        except OSError:
+            return ""
+
+    def cli(self, *args: str, check: bool = True) -> subprocess.CompletedProcess:
+        """`hubwire ARGS` as a user runs it, with this service's socket."""
+        r = subprocess.run([sys.executable, "-m", "hubwire", *args], env=self.env, capture_output=True,
+                           text=True, timeout=60)
+        if check:
+            assert r.returncode == 0, f"hubwire {' '.join(args)}: {r.returncode}\n{r.stdout}\n{r.stderr}"
+        return r
+
+    def boards(self) -> List[Dict[str, Any]]:
+        return json.loads(self.cli("list", "--json").stdout)  # type: ignore[no-any-return]
+
+    def board(self, key: str) -> Optional[Dict[str, Any]]:
+        return next((b for b in self.boards() if b["key"] == key), None)
+
+    def wait_state(self, key: str, state: str, port: Optional[str] = None) -> Dict[str, Any]:
+        def ok() -> Optional[Dict[str, Any]]:
+            b = self.board(key)
+            return b if b is not None and b["state"] == state and (port is None or b["port"] == port) else None
+        return wait_for(ok, what=f"board {key} {state}{' on ' + port if port else ''}")  # type: ignore[no-any-return]
+
+
+@pytest.fixture
+def boards_dir(tmp_path: Any) -> str:
+    d = tmp_path / "boards"
+    d.mkdir()
+    return str(d)
+
+
+@pytest.fixture
+def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[Serve]:
+    """`hubwire serve` on a socket of this test's own; HUBWIRE_SOCKET points this process at it too."""
+    sock = str(tmp_path / "run" / "hubwire.sock")
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
+               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env.pop("HUBWIRE_NO_SERVICE", None)
+    monkeypatch.setenv("HUBWIRE_SOCKET", sock)
+    monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
+    s = Serve(boards_dir, sock, env, str(tmp_path / "serve.log"))
+    s.start()
+    yield s
+    status = s.stop()
+    assert status == 0, f"hubwire serve exited with {status}; its log:\n{s.log_text()}"
+    assert not os.path.exists(sock), "hubwire serve left its socket behind"
+
+
+@pytest.fixture
+def emulators(boards_dir: str) -> Iterator[Callable[..., Emulator]]:
+    """``start(name, *options)``: an emulated Rover on ``boards_dir/name`` (options such as
+    ``"--board-id", "0a1b"``); every one stopped after the test."""
+    path = emulator_binary()
+    if not os.access(path, os.X_OK):
+        pytest.fail(f"device emulator not found at {path}: build it with `make emulator`", pytrace=False)
+    started: List[Emulator] = []
+
+    def start(name: str, *args: str) -> Emulator:
+        emu = Emulator(path, os.path.join(boards_dir, name), args)
+        emu.start()
+        started.append(emu)
+        return emu
+    yield start
+    for emu in started:
+        emu.stop()

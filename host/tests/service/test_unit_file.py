@@ -1,0 +1,24 @@
+"""The systemd unit agrees with the code: it listens where clients look and caches where it may write."""
+from __future__ import annotations
+
+import configparser
+import os
+import shlex
+
+from hubwire.service.protocol import SYSTEM_SOCKET
+
+UNIT = os.path.join(os.path.dirname(__file__), "..", "..", "hubwire", "service", "hubwire.service")
+
+
+def test_unit_serves_on_the_socket_clients_try_and_caches_in_its_cache_directory() -> None:
+    unit = configparser.ConfigParser(strict=False, interpolation=None)
+    unit.optionxform = str  # type: ignore[assignment,method-assign]
+    with open(UNIT) as fh:
+        unit.read_file(fh)
+    svc = unit["Service"]
+    argv = shlex.split(svc["ExecStart"])
+    assert argv[0].endswith("/bin/hubwire") and argv[1] == "serve"
+    assert argv[argv.index("--socket") + 1] == SYSTEM_SOCKET
+    assert SYSTEM_SOCKET == f"/run/{svc['RuntimeDirectory']}/hubwire.sock"
+    assert svc["Environment"] == f"HUBWIRE_CACHE_DIR=/var/cache/{svc['CacheDirectory']}"
+    assert svc["Group"] == "dialout" and unit["Install"]["WantedBy"] == "multi-user.target"
