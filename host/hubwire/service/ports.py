@@ -67,7 +67,7 @@ class PortScanner:
         """Call ``wake()`` on every tty hotplug event (pyudev); returns the function stopping it, or
         None without pyudev or udev (the service then polls)."""
         try:
-            import pyudev  # type: ignore[import-not-found,unused-ignore]
+            import pyudev  # type: ignore[import-not-found,import-untyped,unused-ignore]
 
             monitor = pyudev.Monitor.from_netlink(pyudev.Context())
             monitor.filter_by("tty")
