@@ -122,13 +122,13 @@ class Watcher:
             topic = str(msg.topic)
             payload = msg.payload if isinstance(msg.payload, bytes) else str(msg.payload).encode()
             corr = getattr(msg.properties, "CorrelationData", None) if msg.properties is not None else None
-            if corr is not None and corr in self.replies:
+            if corr is not None and corr in self.replies and topic == self.reply_topic:
                 fut = self.replies.pop(corr)
                 if not fut.done():
                     fut.set_result(json.loads(payload))
             self.all.append((topic, payload, bool(msg.retain)))
             self.last[topic] = payload
-            self.retained[topic] = bool(msg.retain)
+            self.retained.setdefault(topic, bool(msg.retain))  # of the first: came from the store
             self.changed.set()
 
     def json(self, topic: str) -> Any:
