@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import secrets
+import socket
 from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Set
 
 import aiomqtt
@@ -26,6 +27,15 @@ if TYPE_CHECKING:
 __all__ = ["run_bridge", "Bridge", "BridgeConfig", "FleetLike", "BoardLike"]
 
 log = logging.getLogger("hubwire.mqtt")
+
+#: aiomqtt's own log: it warns whenever more than 10 publishes wait for the socket, which is
+#: normal for streams at full rate (they wait their turn), so only its errors are shown
+_client_log = logging.getLogger("hubwire.mqtt.client")
+if _client_log.level == logging.NOTSET:
+    _client_log.setLevel(logging.ERROR)
+
+#: small messages go out at once (with Nagle's algorithm a reply waits for the peer's delayed ACK)
+NODELAY = ((socket.IPPROTO_TCP, socket.TCP_NODELAY, 1),)
 
 
 class BoardLike(Protocol):
@@ -107,7 +117,8 @@ class Bridge:
         async with aiomqtt.Client(self.host, self.port, identifier=f"hubwire-{self.config.service_id}",
                                   protocol=aiomqtt.ProtocolVersion.V5, will=will, clean_start=True,
                                   keepalive=self.config.keepalive, username=self.username,
-                                  password=self.password) as client:
+                                  password=self.password, socket_options=NODELAY,
+                                  logger=_client_log) as client:
             self.client = client
             self.connections += 1
             await client.publish(status, ONLINE, qos=1, retain=True)

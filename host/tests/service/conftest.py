@@ -34,7 +34,7 @@ class Broker:
         with open(self.conf, "w") as f:
             f.write(f"listener {self.port} 127.0.0.1\nallow_anonymous true\n"
                     f"persistence {'true' if persistence else 'false'}\npersistence_location {workdir}/\n"
-                    "max_queued_messages 100000\nlog_dest stderr\nlog_type error\nlog_type warning\n"
+                    "max_queued_messages 100000\nset_tcp_nodelay true\nlog_dest stderr\nlog_type error\nlog_type warning\n"
                     # run as root, mosquitto would switch to its own user, who cannot write here
                     f"user {getpass.getuser()}\n")
         self.proc: Optional[subprocess.Popen] = None  # type: ignore[type-arg]

@@ -14,7 +14,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 import hubwire.aio
-from hubwire.service.mqtt import Bridge
+from hubwire.service.mqtt import NODELAY, Bridge
 from hubwire.service.topics import BridgeConfig
 
 
@@ -175,7 +175,7 @@ async def watcher(port: int, *topics: str, identifier: Optional[str] = None, per
         if persistent:
             props.SessionExpiryInterval = 3600
         kw.update(protocol=aiomqtt.ProtocolVersion.V5, clean_start=not persistent, properties=props)
-    async with aiomqtt.Client("127.0.0.1", port, identifier=identifier, **kw) as client:
+    async with aiomqtt.Client("127.0.0.1", port, identifier=identifier, socket_options=NODELAY, **kw) as client:
         w = Watcher(client)
         if not v311:
             await client.subscribe(w.reply_topic, qos=1)
