@@ -109,6 +109,8 @@ def entity_config(topics: Topics, service_id: str, key: str, desc: Descriptor, b
         cfg["state_topic"] = state
         if _scalar(ch) in NUMERIC_TYPES:
             cfg["state_class"] = "measurement"
+        elif ch.codec.kind == "str":
+            cfg["value_template"] = "{{ value_json }}"  # the text, without JSON's quotes
     if ch.unit and kind in ("sensor", "number"):
         cfg["unit_of_measurement"] = ch.unit
     return kind, cfg

@@ -8,6 +8,7 @@ works from the fleet's shape only: ``boards()``, ``get(key)`` and ``changes()`` 
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import secrets
 import socket
@@ -89,6 +90,8 @@ class Bridge:
         self.client: Optional[aiomqtt.Client] = None
         self.connected = asyncio.Event()
         self.connections = 0
+        #: boards other services on the same broker announce (key: service id), from their descriptors
+        self.elsewhere: Dict[str, str] = {}
         self._tasks: Set["asyncio.Task[Any]"] = set()
 
     # ---------------------------------------------------------------------------- lifecycle
@@ -124,6 +127,7 @@ class Bridge:
             await client.publish(status, ONLINE, qos=1, retain=True)
             for f in self.topics.command_filters():
                 await client.subscribe(f, qos=1)
+            await client.subscribe(self.topics.descriptor("+"), qos=1)
             if self.config.discovery_prefix:
                 await client.subscribe(f"{self.config.discovery_prefix}/status", qos=1)
             self.outbox.all_dirty()
@@ -211,6 +215,9 @@ class Bridge:
                 for b in self.boards.values():
                     b.publish_discovery(force=True)
             return
+        if topic.endswith("/descriptor"):
+            self._note_descriptor(topic, msg.payload)
+            return
         parsed = self.topics.parse_command(topic)
         if parsed is None:
             return
@@ -218,11 +225,25 @@ class Bridge:
         payload = msg.payload if isinstance(msg.payload, (bytes, bytearray)) else str(msg.payload or "").encode()
         reply = Reply(self, msg.properties, key)
         bb = self.boards.get(key)
+        if bb is None and key in self.elsewhere:
+            return  # a board of another service on this broker: that one answers
         if bb is None:
             self.spawn(reply.error(op, channel, "UnknownBoard",
                                    f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}"))
             return
         self.spawn(bb.command(op, channel, bytes(payload), reply))
+
+
+    def _note_descriptor(self, topic: str, payload: Any) -> None:
+        key = topic[len(self.topics.prefix) + 1:-len("/descriptor")]
+        try:
+            service = json.loads(bytes(payload)).get("service") if payload else None
+        except (ValueError, TypeError, AttributeError):
+            service = None
+        if isinstance(service, str) and service != self.config.service_id and key not in self.boards:
+            self.elsewhere[key] = service
+        else:
+            self.elsewhere.pop(key, None)
 
 
 class Reply:

@@ -59,6 +59,7 @@ def test_each_channel_becomes_the_entity_its_descriptor_implies() -> None:
     assert (temp["unit_of_measurement"], temp["state_class"], temp["state_topic"]) == ("°C", "measurement", "hubwire/lab-1/state/temp")
     assert (speed["min"], speed["max"], speed["unit_of_measurement"]) == (-1, 1, "m/s")
     assert speed["command_topic"] == "hubwire/lab-1/set/speed" and speed["state_topic"] == "hubwire/lab-1/state/speed"
+    assert got["label"][1]["value_template"] == "{{ value_json }}" and "state_class" not in got["label"][1]
     assert got["level"][1]["min"] == 0 and got["level"][1]["max"] == 255 and got["level"][1]["step"] == 1
     assert (lamp["payload_on"], lamp["payload_off"], lamp["state_on"], lamp["state_off"]) == ("true", "false", "true", "false")
     assert got["reset"][1]["command_topic"] == "hubwire/lab-1/call/reset" and got["reset"][1]["payload_press"] == "null"

@@ -119,3 +119,30 @@ def test_malformed_payloads_get_clear_errors_and_nothing_is_applied(broker: Brok
                 assert await w.request("hubwire/rover/read/led", "") == {"ok": True, "value": False}
         await fleet.close()
     run(main())
+
+
+def test_two_services_on_one_broker_one_client_commands_both(broker: Broker, emulators, cache_dir: str) -> None:  # type: ignore[no-untyped-def]
+    emus = emulators(2)
+
+    async def main() -> None:
+        kitchen, garage = StandInFleet(cache_dir), StandInFleet(cache_dir)
+        await kitchen.plug("rover-k", emus[0].link)
+        await garage.plug("rover-g", emus[1].link)
+        async with running_bridge(kitchen, broker.port, service_id="kitchen"), \
+                running_bridge(garage, broker.port, service_id="garage"):
+            async with watcher(broker.port, "hubwire/+/descriptor", "hubwire/_service/+/status", "hubwire/+/error") as w:
+                await w.wait_for(lambda: {"hubwire/rover-k/descriptor", "hubwire/rover-g/descriptor"} <= set(w.last),
+                                 10, "both descriptors")
+                assert w.json("hubwire/rover-k/descriptor")["service"] == "kitchen"
+                assert w.json("hubwire/rover-g/descriptor")["service"] == "garage"
+                assert w.last["hubwire/_service/kitchen/status"] == w.last["hubwire/_service/garage/status"] == b"online"
+                for key in ("rover-k", "rover-g"):
+                    # answered once, by the service that has the board; the other stays silent
+                    assert await w.request(f"hubwire/{key}/set/left", "0.5") == {"ok": True}
+                    assert await w.request(f"hubwire/{key}/read/applied", "") == {"ok": True, "value": 1}
+                await asyncio.sleep(0.3)
+                assert not w.on("hubwire/rover-k/error") and not w.on("hubwire/rover-g/error")
+                assert [r["ok"] for r in w.on(w.reply_topic)] == [True] * 4  # one reply per request
+        await kitchen.close()
+        await garage.close()
+    run(main())
