@@ -131,13 +131,14 @@ class Bridge:
             if self.config.discovery_prefix:
                 await client.subscribe(f"{self.config.discovery_prefix}/status", qos=1)
             self.outbox.all_dirty()
-            publisher = asyncio.get_running_loop().create_task(self._publisher(client))
+            loop = asyncio.get_running_loop()
+            tasks = (loop.create_task(self._publisher(client)), loop.create_task(self._receive(client)))
             self.connected.set()
             try:
-                async for msg in client.messages:
-                    if publisher.done():
-                        publisher.result()  # its error ends the session
-                    self._on_message(msg)
+                # either ending ends the session (a publish that timed out, the connection lost)
+                done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                for t in done:
+                    t.result()
             except asyncio.CancelledError:
                 # a clean stop: say so (the will only covers an unclean end)
                 try:
@@ -146,7 +147,12 @@ class Bridge:
                     pass
                 raise
             finally:
-                publisher.cancel()
+                for t in tasks:
+                    t.cancel()
+
+    async def _receive(self, client: aiomqtt.Client) -> None:
+        async for msg in client.messages:
+            self._on_message(msg)
 
     async def _publisher(self, client: aiomqtt.Client) -> None:
         """Flush the outbox: last values, then events in order, each event until acknowledged."""
