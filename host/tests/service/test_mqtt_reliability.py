@@ -72,9 +72,10 @@ def test_link_loss_takes_the_board_offline_and_back(broker: Broker, emulators, c
     async def main() -> None:
         fleet = StandInFleet(cache_dir)
         await fleet.plug("rover", emu.link)
-        async with running_bridge(fleet, broker.port):
-            async with watcher(broker.port, "hubwire/rover/status", "hubwire/rover/descriptor") as w:
+        async with running_bridge(fleet, broker.port) as bridge:
+            async with watcher(broker.port, "hubwire/rover/status", "hubwire/rover/descriptor", EVENTS) as w:
                 await w.wait_for(lambda: w.last.get("hubwire/rover/status") == b"online", 5, "online")
+                await bump(emu, bridge, 1)
                 emu.pause()  # a silent board: the hub declares the link lost after 4 heartbeats
                 await w.wait_for(lambda: w.last.get("hubwire/rover/status") == b"offline", 10, "offline")
                 assert w.json("hubwire/rover/descriptor")["state"] == "lost"
@@ -83,6 +84,10 @@ def test_link_loss_takes_the_board_offline_and_back(broker: Broker, emulators, c
                 emu.resume()
                 await w.wait_for(lambda: w.last.get("hubwire/rover/status") == b"online", 10, "online again")
                 assert await w.request("hubwire/rover/set/left", "0.25") == {"ok": True}
+                await bump(emu, bridge, 1)  # events go on across the board's reconnect, once each
+                await w.wait_for(lambda: len(deduped(w)) == 2, 5, "2 events")
+                assert [(e["value"], e["id"].rsplit(":", 1)[1]) for e in deduped(w)] == [(True, "1"), (False, "2")]
+                assert len(w.on(EVENTS)) == 2
                 statuses = [p for t, p, _ in w.all if t == "hubwire/rover/status"]
                 assert statuses == [b"online", b"offline", b"online"]
         await fleet.close()
