@@ -208,3 +208,62 @@ def test_streams_at_the_rate_asked_under_the_ceiling(broker: Broker, emulators, 
                 assert len(w.on(topic)) == n1  # stopped: nobody asks any more
         await fleet.close()
     run(main())
+
+
+CHILD = """
+import asyncio, sys
+sys.path.insert(0, sys.argv[3])
+from service.helpers import StandInFleet
+from hubwire.service.mqtt import run_bridge
+
+async def main():
+    fleet = StandInFleet(sys.argv[4])
+    await fleet.plug("rover", sys.argv[2])
+    print("READY", flush=True)
+    await run_bridge(fleet, "127.0.0.1", int(sys.argv[1]), service_id="child", keepalive=5)
+
+asyncio.run(main())
+"""
+
+
+def test_the_last_will_marks_the_service_offline_when_it_dies(broker: Broker, emulators, cache_dir: str) -> None:  # type: ignore[no-untyped-def]
+    import os
+    import subprocess
+    import sys
+
+    emu, = emulators(1)
+    tests_dir = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    status = "hubwire/_service/child/status"
+
+    async def main() -> None:
+        async with watcher(broker.port, status, "hubwire/rover/status") as w:
+            child = subprocess.Popen([sys.executable, "-c", CHILD, str(broker.port), emu.link, tests_dir, cache_dir],
+                                     stdout=subprocess.PIPE)
+            try:
+                await w.wait_for(lambda: w.last.get(status) == b"online", 15, "the service online")
+                await w.wait_for(lambda: w.last.get("hubwire/rover/status") == b"online", 10, "the board online")
+                child.kill()  # no goodbye: only the broker's last will can tell
+                child.wait(10)
+                await w.wait_for(lambda: w.last.get(status) == b"offline", 10, "the last will")
+            finally:
+                if child.poll() is None:
+                    child.kill()
+                    child.wait(10)
+            # the board's own topic keeps its last value; Home Assistant's "all" takes both
+            assert w.last["hubwire/rover/status"] == b"online"
+    run(main())
+
+
+def test_a_clean_stop_says_offline_itself(broker: Broker, emulators, cache_dir: str) -> None:  # type: ignore[no-untyped-def]
+    emu, = emulators(1)
+
+    async def main() -> None:
+        fleet = StandInFleet(cache_dir)
+        await fleet.plug("rover", emu.link)
+        async with watcher(broker.port, "hubwire/_service/test/status") as w:
+            async with running_bridge(fleet, broker.port):
+                await w.wait_for(lambda: w.last.get("hubwire/_service/test/status") == b"online", 10, "online")
+            await w.wait_for(lambda: w.last.get("hubwire/_service/test/status") == b"offline", 10, "offline")
+            assert [p for t, p, _ in w.all] == [b"online", b"offline"]
+        await fleet.close()
+    run(main())
