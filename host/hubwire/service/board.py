@@ -116,6 +116,8 @@ class BoardBridge:
             box.put_latest(topic, payload)
             if force:
                 box.dirty[topic] = None
+        if force:
+            box.wake.set()
         self._discovery = new
 
     # ------------------------------------------------------------------------------ states
@@ -126,6 +128,10 @@ class BoardBridge:
         if dev is None or desc is None:
             return
         readable = [ch for ch in desc.channels if ch.readable]
+        box, head = self.bridge.outbox, self.t.state(self.key, "")
+        for topic in [t for t in box.latest if t.startswith(head)]:
+            if desc.by_name(topic[len(head):]) is None:
+                box.forget(topic)  # a channel the board's new firmware no longer has
         if readable:
             self._tasks.append(self.bridge.spawn(self._poll_states(dev, readable)))
         for name, hz in self.bridge.config.streams.items():

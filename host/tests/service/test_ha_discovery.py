@@ -90,7 +90,8 @@ def test_the_bridge_retains_discovery_and_sends_it_again_when_home_assistant_sta
     async def main() -> None:
         fleet = StandInFleet(cache_dir)
         await fleet.plug("rover", emu.link)
-        async with running_bridge(fleet, broker.port):
+        # states read rarely: nothing else wakes the bridge while Home Assistant asks again
+        async with running_bridge(fleet, broker.port, state_hz=0.05, poll_s=100):
             topics = {f"homeassistant/{k}/rover/{c}/config" for c, k in want.items()}
             async with watcher(broker.port, "homeassistant/+/rover/+/config") as first:
                 await first.wait_for(lambda: topics <= set(first.last), 10, "discovery configs")
