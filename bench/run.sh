@@ -39,6 +39,7 @@ step throughput "$BENCH_PY" bench/throughput.py
 step connect "$PY" bench/connect.py
 step rtt "$PY" bench/rtt.py
 step many "$PY" bench/many.py
+step mqtt "$PY" bench/mqtt_bridge.py
 "$PY" bench/report.py "$(($(date +%s) - start))" || status=1
 echo "bench: wrote bench/RESULTS.md in $(($(date +%s) - start)) s" >&2
 exit $status

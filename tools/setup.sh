@@ -14,6 +14,7 @@ PACKAGES=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi            # 32-bit (Cortex-M) compile checks
   clang libclang-rt-dev                                # libFuzzer + ASan/UBSan (test/fuzz)
   python3 python3-venv python3-pip python3-dev         # the hub; -dev builds cobs' C extension
+  mosquitto mosquitto-clients                          # MQTT bridge tests and bench (a private broker)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

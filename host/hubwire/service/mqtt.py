@@ -1,0 +1,291 @@
+"""The MQTT bridge: every board of a fleet on a broker (docs/MQTT.md has the topic layout).
+
+``hubwire serve --mqtt HOST:PORT`` runs :func:`run_bridge` on the service's loop next to its fleet.
+The bridge keeps its own connection to the broker up (reconnecting with the same last will), and
+works from the fleet's shape only: ``boards()``, ``get(key)`` and ``changes()`` of boards with
+``key``, ``name``, ``board_id``, ``port``, ``state`` and ``device`` (an ``AsyncDevice``).
+"""
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import secrets
+import socket
+from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Set
+
+import aiomqtt
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+
+from .board import BoardBridge
+from .outbox import Outbox
+from .topics import OFFLINE, ONLINE, BridgeConfig, Topics, dumps
+
+if TYPE_CHECKING:
+    from ..aio import AsyncDevice
+
+__all__ = ["run_bridge", "Bridge", "BridgeConfig", "FleetLike", "BoardLike"]
+
+log = logging.getLogger("hubwire.mqtt")
+
+#: aiomqtt's own log: it warns whenever more than 10 publishes wait for the socket, which is
+#: normal for streams at full rate (they wait their turn), so only its errors are shown
+_client_log = logging.getLogger("hubwire.mqtt.client")
+if _client_log.level == logging.NOTSET:
+    _client_log.setLevel(logging.ERROR)
+
+#: small messages go out at once (with Nagle's algorithm a reply waits for the peer's delayed ACK)
+NODELAY = ((socket.IPPROTO_TCP, socket.TCP_NODELAY, 1),)
+
+
+class BoardLike(Protocol):
+    """A board as the service's fleet has it (docs of ``hubwire.service.fleet.Board``)."""
+
+    key: str
+    name: str
+    board_id: Optional[str]
+    port: Optional[str]
+    state: str
+    device: Optional["AsyncDevice"]
+
+
+class FleetLike(Protocol):
+    def boards(self) -> List[Any]: ...
+
+    def get(self, key: str) -> Any: ...
+
+    def changes(self) -> AsyncIterator[Any]: ...
+
+
+async def run_bridge(fleet: FleetLike, host: str, port: int = 1883, *, prefix: str = "hubwire",
+                     config: Optional[BridgeConfig] = None, username: Optional[str] = None,
+                     password: Optional[str] = None, **settings: Any) -> None:
+    """Bridge ``fleet`` to the MQTT broker at ``host:port`` until cancelled.
+
+    ``settings`` are fields of :class:`BridgeConfig` (``discovery_prefix``, ``service_id``,
+    ``max_rate_hz``, ``streams``, ...), or pass a whole ``config``.
+    """
+    cfg = config or BridgeConfig(prefix=prefix, **settings)
+    await Bridge(fleet, host, port, cfg, username=username, password=password).run()
+
+
+class Bridge:
+    """One fleet on one broker. :meth:`run` until cancelled; ``connected`` is set while the broker
+    has us (tests and the bench wait on it)."""
+
+    def __init__(self, fleet: FleetLike, host: str, port: int, config: BridgeConfig, *,
+                 username: Optional[str] = None, password: Optional[str] = None) -> None:
+        self.fleet = fleet
+        self.host = host
+        self.port = port
+        self.config = config
+        self.username = username
+        self.password = password
+        self.topics = Topics(config.prefix, config.discovery_prefix)
+        self.outbox = Outbox(config.event_backlog)
+        #: names this run of the bridge in event ids, so ids never repeat across restarts
+        self.run_id = secrets.token_hex(4)
+        self.boards: Dict[str, BoardBridge] = {}
+        self.client: Optional[aiomqtt.Client] = None
+        self.connected = asyncio.Event()
+        self.connections = 0
+        #: boards other services on the same broker announce (key: service id), from their descriptors
+        self.elsewhere: Dict[str, str] = {}
+        self._tasks: Set["asyncio.Task[Any]"] = set()
+
+    # ---------------------------------------------------------------------------- lifecycle
+
+    async def run(self) -> None:
+        watcher = asyncio.get_running_loop().create_task(self._watch_fleet())
+        try:
+            while True:
+                try:
+                    await self._session()
+                except aiomqtt.MqttError as e:
+                    log.info("hubwire: broker %s:%d: %s", self.host, self.port, e)
+                self.client = None
+                self.connected.clear()
+                await asyncio.sleep(self.config.reconnect_s)
+        finally:
+            watcher.cancel()
+            for b in self.boards.values():
+                b.close()
+            for t in list(self._tasks):
+                t.cancel()
+
+    async def _session(self) -> None:
+        status = self.topics.service_status(self.config.service_id)
+        will = aiomqtt.Will(status, OFFLINE, qos=1, retain=True)
+        async with aiomqtt.Client(self.host, self.port, identifier=f"hubwire-{self.config.service_id}",
+                                  protocol=aiomqtt.ProtocolVersion.V5, will=will, clean_start=True,
+                                  keepalive=self.config.keepalive, username=self.username,
+                                  password=self.password, socket_options=NODELAY,
+                                  logger=_client_log) as client:
+            self.client = client
+            self.connections += 1
+            await client.publish(status, ONLINE, qos=1, retain=True)
+            for f in self.topics.command_filters():
+                await client.subscribe(f, qos=1)
+            await client.subscribe(self.topics.descriptor("+"), qos=1)
+            if self.config.discovery_prefix:
+                await client.subscribe(f"{self.config.discovery_prefix}/status", qos=1)
+            self.outbox.all_dirty()
+            loop = asyncio.get_running_loop()
+            tasks = (loop.create_task(self._publisher(client)), loop.create_task(self._receive(client)))
+            self.connected.set()
+            try:
+                # either ending ends the session (a publish that timed out, the connection lost)
+                done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                for t in done:
+                    t.result()
+            except asyncio.CancelledError:
+                # a clean stop: say so (the will only covers an unclean end)
+                try:
+                    await asyncio.wait_for(client.publish(status, OFFLINE, qos=1, retain=True), 2)
+                except (aiomqtt.MqttError, asyncio.TimeoutError):
+                    pass
+                raise
+            finally:
+                for t in tasks:
+                    t.cancel()
+
+    async def _receive(self, client: aiomqtt.Client) -> None:
+        async for msg in client.messages:
+            self._on_message(msg)
+
+    async def _publisher(self, client: aiomqtt.Client) -> None:
+        """Flush the outbox: last values, then events in order, each event until acknowledged."""
+        box = self.outbox
+        while True:
+            await box.wake.wait()
+            box.wake.clear()
+            while True:
+                item = box.take_latest()
+                if item is None:
+                    break
+                try:
+                    await client.publish(item[0], item[1], qos=1, retain=True)
+                except aiomqtt.MqttError:
+                    box.requeue_latest(*item)
+                    raise
+            while box.events:
+                topic, payload = box.events[0]
+                await client.publish(topic, payload, qos=1)  # raises when the connection drops: kept
+                if box.events and box.events[0] == (topic, payload):
+                    box.events.popleft()
+                if box.dirty:
+                    box.wake.set()
+                    break
+
+    # -------------------------------------------------------------------------------- fleet
+
+    async def _watch_fleet(self) -> None:
+        for b in self.fleet.boards():
+            self._board_changed(b)
+        async for b in self.fleet.changes():
+            self._board_changed(b)
+
+    def _board_changed(self, board: Any) -> None:
+        bb = self.boards.get(board.key)
+        if bb is None:
+            bb = self.boards[board.key] = BoardBridge(self, board.key)
+        bb.update(board)
+
+    # ------------------------------------------------------------------------------ sending
+
+    def spawn(self, coro: Any) -> "asyncio.Task[Any]":
+        task = asyncio.get_running_loop().create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return task
+
+    async def send(self, topic: str, payload: str, *, qos: int = 0,
+                   properties: Optional[Properties] = None) -> bool:
+        """Publish now if connected (streams, replies); False when it could not go out."""
+        client = self.client
+        if client is None:
+            return False
+        try:
+            await client.publish(topic, payload, qos=qos, properties=properties)
+            return True
+        except aiomqtt.MqttError:
+            return False
+
+    # ----------------------------------------------------------------------------- commands
+
+    def _on_message(self, msg: aiomqtt.Message) -> None:
+        topic = str(msg.topic)
+        if self.config.discovery_prefix and topic == f"{self.config.discovery_prefix}/status":
+            if bytes(msg.payload or b"") == ONLINE.encode():  # Home Assistant (re)started
+                for b in self.boards.values():
+                    b.publish_discovery(force=True)
+            return
+        if topic.endswith("/descriptor"):
+            self._note_descriptor(topic, msg.payload)
+            return
+        parsed = self.topics.parse_command(topic)
+        if parsed is None:
+            return
+        key, op, channel = parsed
+        payload = msg.payload if isinstance(msg.payload, (bytes, bytearray)) else str(msg.payload or "").encode()
+        reply = Reply(self, msg.properties, key)
+        bb = self.boards.get(key)
+        if bb is None and key in self.elsewhere:
+            return  # a board of another service on this broker: that one answers
+        if bb is None:
+            self.spawn(reply.error(op, channel, "UnknownBoard",
+                                   f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}"))
+            return
+        self.spawn(bb.command(op, channel, bytes(payload), reply))
+
+
+    def _note_descriptor(self, topic: str, payload: Any) -> None:
+        key = topic[len(self.topics.prefix) + 1:-len("/descriptor")]
+        try:
+            service = json.loads(bytes(payload)).get("service") if payload else None
+        except (ValueError, TypeError, AttributeError):
+            service = None
+        if isinstance(service, str) and service != self.config.service_id and key not in self.boards:
+            self.elsewhere[key] = service
+        else:
+            self.elsewhere.pop(key, None)
+
+
+class Reply:
+    """Where the answer to one command goes: the MQTT 5 response topic (with its correlation data),
+    the ``reply_to`` of an ``rpc`` envelope (MQTT 3.1.1 clients), or, for errors only, the board's
+    ``error`` topic."""
+
+    def __init__(self, bridge: Bridge, props: Optional[Properties], key: str) -> None:
+        self.bridge = bridge
+        self.key = key
+        self.topic: Optional[str] = getattr(props, "ResponseTopic", None) if props is not None else None
+        self.correlation: Optional[bytes] = getattr(props, "CorrelationData", None) if props is not None else None
+        self.rpc_id: Any = None
+        self.is_rpc = False
+
+    def envelope(self, reply_to: Optional[str], rpc_id: Any) -> None:
+        self.is_rpc = True
+        self.rpc_id = rpc_id
+        if self.topic is None:
+            self.topic = reply_to or self.bridge.topics.rpc_reply(self.key)
+
+    async def send(self, body: Dict[str, Any]) -> None:
+        if self.is_rpc:
+            body = {"id": self.rpc_id, **body}
+        if self.topic is None:
+            if body.get("ok") is False:
+                await self.bridge.send(self.bridge.topics.errors(self.key), dumps(body), qos=1)
+            return
+        props = None
+        if self.correlation is not None:
+            props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+            props.CorrelationData = self.correlation
+        await self.bridge.send(self.topic, dumps(body), qos=1, properties=props)
+
+    async def ok(self, **fields: Any) -> None:
+        await self.send({"ok": True, **fields})
+
+    async def error(self, op: str, channel: Optional[str], kind: str, message: str, **extra: Any) -> None:
+        await self.send({"ok": False, "op": op, "channel": channel, "error": kind, "message": message, **extra})
