@@ -74,11 +74,11 @@ def broker_address(where: str) -> Tuple[str, int]:
 def mqtt_bridge() -> Callable[..., Any]:
     """``hubwire.service.mqtt.run_bridge``, or SystemExit saying it is missing."""
     try:
-        from .mqtt import run_bridge  # type: ignore[import-not-found,unused-ignore]
+        from .mqtt import run_bridge
     except ImportError as e:
-        raise SystemExit(f"hubwire serve: --mqtt needs the MQTT bridge (hubwire.service.mqtt), which this "
-                         f"installation lacks ({e})") from None
-    return run_bridge  # type: ignore[no-any-return,unused-ignore]
+        raise SystemExit(f"hubwire serve: --mqtt needs the MQTT client libraries, which this installation "
+                         f"lacks ({e}); install them with: pip install 'hubwire[mqtt]'") from None
+    return run_bridge
 
 
 def cmd_serve(args: argparse.Namespace) -> int:

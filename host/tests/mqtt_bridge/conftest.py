@@ -69,7 +69,7 @@ class Broker:
 
 def _broker(tmp_path, persistence: bool) -> Iterator[Broker]:  # type: ignore[no-untyped-def]
     if MOSQUITTO is None:
-        pytest.skip("mosquitto is not installed (tools/setup.sh installs it: apt-get install mosquitto)")
+        pytest.fail("mosquitto is not installed: run tools/setup.sh (or apt-get install mosquitto)", pytrace=False)
     d = tmp_path / ("broker-p" if persistence else "broker")
     d.mkdir()
     b = Broker(MOSQUITTO, str(d), persistence)

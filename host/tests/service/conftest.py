@@ -10,7 +10,7 @@ import signal
 import subprocess
 import sys
 import time
-from typing import Any, Callable, Dict, Iterator, List, Optional
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence
 
 import pytest
 
@@ -36,8 +36,9 @@ def wait_for(predicate: Callable[[], Any], timeout: float = 15.0, what: str = "c
 class Serve:
     """One `hubwire serve` process serving every port that appears in ``boards_dir``."""
 
-    def __init__(self, boards_dir: str, socket: str, env: Dict[str, str], log: str) -> None:
+    def __init__(self, boards_dir: str, socket: str, env: Dict[str, str], log: str, args: Sequence[str] = ()) -> None:
         self.boards_dir = boards_dir
+        self.args = list(args)  # more `hubwire serve` options, e.g. ["--mqtt", "127.0.0.1:1883"]
         self.socket = socket
         self.env = env
         self.log = log
@@ -45,7 +46,7 @@ class Serve:
 
     def start(self, timeout: float = 20.0) -> None:
         argv = [sys.executable, "-m", "hubwire", "serve", "--no-usb", "--watch", os.path.join(self.boards_dir, "*"),
-                "--socket", self.socket, "--poll", "0.2", "-v"]
+                "--socket", self.socket, "--poll", "0.2", "-v", *self.args]
         with open(self.log, "ab") as err:
             self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL,
                                          env=self.env)
