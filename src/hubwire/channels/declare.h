@@ -23,8 +23,17 @@
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
   constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
+  constexpr uint16_t features = ::hubwire::declare::featuresOf(declared.list);                     \
   }                                                                                                \
+  HUBWIRE_SKETCH_FEATURES(hubwire_channels_##var::features)                                        \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>()
+
+// The sketch's features, for the session to test (features.h); none with HUBWIRE_ALL_FEATURES.
+#if defined(HUBWIRE_ALL_FEATURES)
+#define HUBWIRE_SKETCH_FEATURES(f)
+#else
+#define HUBWIRE_SKETCH_FEATURES(f) const uint16_t hubwire::sketchFeatures = f;
+#endif
 
 #endif

@@ -299,6 +299,13 @@ template <typename D, const D* Decls, size_t... I>
 const ChannelInfo Infos<D, Decls, cx::Seq<I...> >::value[sizeof...(I) ? sizeof...(I) : 1] HUBWIRE_FLASH = {
     InfoOf<D, Decls, I>::make()...};
 
+// The features of the whole list (features.h).
+constexpr uint16_t featuresOf(const List<>&) { return 0; }
+template <typename H, typename... R>
+constexpr uint16_t featuresOf(const List<H, R...>& l) {
+  return (uint16_t)(l.head.features() | featuresOf(l.tail));
+}
+
 template <typename D, const D* Decls>
 constexpr ChannelTable table() {
   static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),

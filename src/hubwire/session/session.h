@@ -160,7 +160,6 @@ class Session : private SessionState {
   void loseLink();
   void sendHello(bool reply);
   void drawNonce(uint32_t hubNonce);
-  static uint32_t mixNonce(uint32_t h, uint32_t v) HUBWIRE_NOINLINE;
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
