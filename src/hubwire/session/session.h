@@ -2,8 +2,9 @@
 // events and streams (docs/PROTOCOL.md 3-4), over the Port seam (port.h).
 //
 // The channels come from HUBWIRE_CHANNELS (../channels/declare.h): the descriptor JSON and one
-// record per channel, constants in flash. Nothing about a channel is copied into RAM, so a channel
-// costs flash only: that is what lets an Uno with 2 KB of SRAM carry a dozen described channels.
+// record per channel, constants in flash (HUBWIRE_FLASH, text.h: also on Teensy 4, which would copy
+// plain constants to RAM). Nothing about a channel is copied into RAM, so a channel costs flash
+// only: that is what lets an Uno with 2 KB of SRAM carry a dozen described channels.
 #ifndef HUBWIRE_SESSION_SESSION_H
 #define HUBWIRE_SESSION_SESSION_H
 
