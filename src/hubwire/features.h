@@ -11,6 +11,8 @@
 
 #include <stdint.h>
 
+#include "config.h"
+
 namespace hubwire {
 
 const uint16_t kUsesStreams = 1;  // a streamable() variable: subscriptions and samples
@@ -29,7 +31,7 @@ extern const uint16_t sketchFeatures;
 
 /// Does the sketch use any of the features f? A constant with link-time optimisation.
 ///   if (!uses(kUsesStreams)) return;
-inline bool uses(uint16_t f) { return (sketchFeatures & f) != 0; }
+HUBWIRE_ALWAYS_INLINE bool uses(uint16_t f) { return (sketchFeatures & f) != 0; }
 
 }  // namespace hubwire
 
