@@ -16,7 +16,8 @@
 #include "dsl.h"
 #include "tables.h"
 
-/// Declares a sketch's channels at file scope; `var` is then what begin() takes. After the device:
+/// Declares a sketch's channels at file scope, outside any namespace (it defines
+/// hubwire::sketchFeatures, features.h); `var` is then what begin() takes. After the device:
 /// expose(), control(), action() and event() (dsl.h), with their options.
 ///   HUBWIRE_CHANNELS(channels, "minimal", expose("blink_ms", blinkMs).writable(), event("button", button));
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
