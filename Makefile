@@ -23,8 +23,9 @@ emulator: cpp
 simuno:
 	$(MAKE) -C tools/simuno BUILD_DIR=$(CURDIR)/$(BUILD)/simuno
 
-# Every example for the Uno, as the simulated-Uno tests (and, for Rover, the demo) run them.
-EXAMPLES := $(notdir $(patsubst %/,%,$(wildcard examples/*/)))
+# Every example for the Uno, as the simulated-Uno tests (and, for Rover, the demo) run them: the
+# folders holding a sketch of their name (examples/ESP32/ holds examples for that family only).
+EXAMPLES := $(foreach d,$(wildcard examples/*/),$(if $(wildcard $(d)$(notdir $(patsubst %/,%,$(d))).ino),$(notdir $(patsubst %/,%,$(d)))))
 uno-firmware:
 	@for e in $(EXAMPLES); do \
 	  bash tools/arduino/build-sketch.sh examples/$$e arduino:avr:uno $(BUILD)/uno/$$e >/dev/null || exit 1; \

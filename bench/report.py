@@ -17,7 +17,7 @@ from common import RESULTS, ROOT, md_table, row
 
 ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many", "mqtt"]
 SCALE = {
-    "footprint": "SerialTransfer +2.9 KB/+677 B, rosserial +8.2 KB/+854 B, StandardFirmata +11.7 KB/+883 B",
+    "footprint": "peers: see Peers below (bash bench/peers.sh)",
     "rx_cycles": "CRC-16 bitwise 108 c/B, PROGMEM table 24 c/B, _crc_xmodem_update 34 c/B; COBS decode 13 c/B",
     "wire_bytes": "MAVLink v2 12, rosserial 8, SerialComm 11",
     "throughput": "pymavlink / pySerialTransfer measured in the same run",
@@ -59,6 +59,17 @@ def misses() -> str:
     """The hand-written analysis of the rows that miss their target (bench/MISSES.md)."""
     path = os.path.join(ROOT, "bench/MISSES.md")
     return ("\n" + open(path).read()) if os.path.exists(path) else ""
+
+
+def measured_apart() -> str:
+    """Tables measured by scripts that need folders from outside the repository (peers' sources,
+    vendor cores), kept from their last run: bench/PEERS.md and bench/REALCORES.md."""
+    out = ""
+    for name, title in (("PEERS.md", "Peers"), ("REALCORES.md", "Real Arduino cores")):
+        path = os.path.join(ROOT, "bench", name)
+        if os.path.exists(path):
+            out += f"\n## {title} (bench/{name}, measured apart)\n\n" + open(path).read().strip() + "\n"
+    return out
 
 
 def main() -> None:
@@ -109,7 +120,7 @@ ratios are taken within one run. No test asserts on any timing here.
 
 {md_table(["row", "target", "measured", "verdict", "command", "notes / for scale"], table)}
 
-""" + misses() + """
+""" + misses() + measured_apart() + """
 ## Details
 
 """ + "\n".join(parts[n]["details"] for n in ORDER if n in parts)

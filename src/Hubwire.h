@@ -24,10 +24,10 @@
 //   }
 //
 // HUBWIRE_CHANNELS turns the declarations into the descriptor JSON and one record per channel,
-// constants in flash, so a channel costs no RAM and a wrong declaration fails to compile. The
-// declarations and their options are in src/hubwire/channels/dsl.h (declare.h gathers them); the
-// session is src/hubwire/session/session.h (class hubwire::Session, which Hubwire extends); the
-// protocol is in docs/PROTOCOL.md.
+// constants in flash (text.h says how, board by board), so a channel costs no RAM and a wrong
+// declaration fails to compile. The declarations and their options are in
+// src/hubwire/channels/dsl.h (declare.h gathers them); the session is src/hubwire/session/session.h
+// (class hubwire::Session, which Hubwire extends); the protocol is in docs/PROTOCOL.md.
 #ifndef HUBWIRE_H
 #define HUBWIRE_H
 

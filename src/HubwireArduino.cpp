@@ -2,6 +2,14 @@
 // a per-boot nonce comes from.
 #include "Hubwire.h"
 
+// ESP-IDF 5 (arduino-esp32 3.x) no longer declares esp_random() through esp_system.h; the header
+// of its own exists from IDF 4.1 on, and older cores get it through Arduino.h.
+#if defined(ESP32) && defined(__has_include)
+#if __has_include(<esp_random.h>)
+#include <esp_random.h>
+#endif
+#endif
+
 namespace hubwire {
 
 int portRead(Port& p) { return p.stream.read(); }

@@ -65,8 +65,10 @@
 // Keeps a small function called from many places out of line, where GCC's inlining would repeat it.
 #if defined(__GNUC__)
 #define HUBWIRE_NOINLINE __attribute__((noinline))
+#define HUBWIRE_ALWAYS_INLINE inline __attribute__((always_inline))
 #else
 #define HUBWIRE_NOINLINE
+#define HUBWIRE_ALWAYS_INLINE inline
 #endif
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__

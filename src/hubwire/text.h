@@ -28,12 +28,22 @@ struct Text {
 
 inline Text flashText(const char* s) { return Text(s, true); }
 
-// Puts a constant table in flash on AVR (elsewhere constants are not in RAM anyway); read it
-// through a flash Text.
+// Puts a constant table in flash where constants would otherwise be copied to RAM: on AVR (read
+// through a flash Text or memcpy_P) and on Teensy 4 (i.MX RT1062), whose linker script puts .rodata
+// in RAM and whose PROGMEM is this section of the memory-mapped flash (read like RAM). Elsewhere
+// (ARM Cortex-M with flash, ESP32, RP2040, a PC) constants stay in flash or are memory anyway.
 #if defined(__AVR__)
 #define HUBWIRE_FLASH PROGMEM
+#elif defined(__IMXRT1062__)
+#define HUBWIRE_FLASH __attribute__((section(".progmem")))
 #else
 #define HUBWIRE_FLASH
+#endif
+// The same for a constant read like any other (no pgm_read on AVR, where it stays as it is).
+#if defined(__IMXRT1062__)
+#define HUBWIRE_RODATA HUBWIRE_FLASH
+#else
+#define HUBWIRE_RODATA
 #endif
 
 }  // namespace hubwire

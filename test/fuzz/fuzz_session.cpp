@@ -87,6 +87,9 @@ void actVoid(uint16_t v) { calls += v & 1; }
 int32_t noArg() { return (int32_t)++calls; }
 void plain() { ++calls; }
 
+}  // namespace
+
+// At file scope, as in a sketch (the macro defines hubwire::sketchFeatures).
 HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   expose("b", vBool).writable().failsafe(0).onChange(changed),
   expose("u8", vU8).writable().streamable().range(0, 200).unit("x"),
@@ -109,6 +112,8 @@ HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   event("bump", evBool),
   event("count", evU16),
   event("level", evF32));
+
+namespace {
 
 void resetState() {
   vBool = false;

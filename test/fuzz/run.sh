@@ -27,7 +27,7 @@ case "${1:-}" in
 esac
 
 HARNESSES=(frame session)
-CORE=("$ROOT"/src/hubwire/wire/*.cpp "$ROOT"/src/hubwire/session/*.cpp)
+CORE=("$ROOT"/src/hubwire/*.cpp "$ROOT"/src/hubwire/wire/*.cpp "$ROOT"/src/hubwire/session/*.cpp)
 FLAGS=(-std=c++11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
        -fno-omit-frame-pointer -Wall -Wextra -I"$ROOT/src")
 mkdir -p "$OUT/artifacts"

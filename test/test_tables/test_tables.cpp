@@ -90,3 +90,26 @@ int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+namespace {
+
+char label[8];
+uint8_t beepsLeft;
+uint8_t beep(uint8_t n) { return beepsLeft = n; }
+
+}  // namespace
+
+HUBWIRE_CHANNELS(others, "others", expose("label", label).streamable(), action("beep", beep));
+
+namespace {
+
+// What each declaration adds to the features HUBWIRE_CHANNELS works out (features.h).
+TEST(Tables, FeaturesOfTheDeclarations) {
+  EXPECT_EQ(hubwire_channels_bench::features,
+            kUsesWrites | kUsesReads | kUsesRanges | kUsesFailsafes | kUsesStructs | kUsesCalls | kUsesEvents);
+  EXPECT_EQ(hubwire_channels_others::features, kUsesStrings | kUsesReads | kUsesStreams | kUsesCalls | kUsesReturns);
+  // This program has several tables (HUBWIRE_ALL_FEATURES): the library's default holds.
+  EXPECT_EQ(sketchFeatures, kAllFeatures);
+}
+
+}  // namespace

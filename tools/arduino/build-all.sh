@@ -16,7 +16,11 @@ EXAMPLES_DIR=${EXAMPLES_DIR:-$ROOT/examples}
 FQBNS=${FQBNS:-"arduino:avr:uno arduino:avr:mega:cpu=atmega2560 arduino:avr:leonardo"}
 
 shopt -s nullglob
-sketches=("$EXAMPLES_DIR"/*/)
+# Folders holding a sketch of their name (examples/ESP32/ holds examples for that family only).
+sketches=()
+for d in "$EXAMPLES_DIR"/*/; do
+	[ -f "$d/$(basename "$d").ino" ] && sketches+=("$d")
+done
 if [ ${#sketches[@]} -eq 0 ]; then
 	echo "build-all: no sketches under $EXAMPLES_DIR" >&2
 	exit 1

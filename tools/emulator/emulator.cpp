@@ -3,15 +3,24 @@
 //
 //   hubwire-emulator --link /tmp/rover     prints "READY /tmp/rover", runs until SIGTERM/SIGINT
 //   hubwire-emulator --link /tmp/rover --board-id 0a1b   the board id it reports (1..16 bytes, hex)
+//   hubwire-emulator --tcp 0               Serial is a TCP connection instead, as a board on WiFi
+//                                          serves it: listens on 127.0.0.1 (port 0: any free one),
+//                                          prints "READY socket://127.0.0.1:PORT", takes one hub at a
+//                                          time and the next one after it hangs up
 //
-// SIGUSR2 presses or releases the bumper (pin 2), as a finger would on the real robot.
+// SIGUSR2 presses or releases the bumper (pin 2), as a finger would on the real robot. With --tcp,
+// SIGHUP drops the hub's connection, as a WiFi link that fails does.
 #include <ctype.h>
 #include <errno.h>
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <string.h>
 #include <termios.h>
@@ -25,12 +34,14 @@ EmulatedSerial Serial;
 namespace {
 volatile sig_atomic_t running = 1;
 volatile sig_atomic_t bumperToggles = 0;
+volatile sig_atomic_t dropRequests = 0;
 uint8_t pinLevel[64];
 uint8_t pinModes[64];
 struct timespec started;
 
 void onStop(int) { running = 0; }
 void onBumper(int) { bumperToggles = bumperToggles + 1; }
+void onDrop(int) { dropRequests = dropRequests + 1; }
 
 uint64_t nowUs() {
   struct timespec t;
@@ -54,7 +65,13 @@ int EmulatedSerial::read() {
   }
   uint8_t b;
   ssize_t n = ::read(fd_, &b, 1);
+  if (n == 0 && socket_) hangUp();  // the hub closed the connection
   return n == 1 ? b : -1;
+}
+
+void EmulatedSerial::hangUp() {
+  close(fd_);
+  fd_ = -1;
 }
 
 int EmulatedSerial::peek() {
@@ -71,6 +88,7 @@ size_t EmulatedSerial::write(const uint8_t* data, size_t len) {
     } else if (n < 0 && errno == EAGAIN) {
       return done;  // nobody is reading: drop, like a UART with no listener
     } else if (n < 0 && errno != EINTR) {
+      if (socket_) hangUp();  // the hub is gone (EPIPE, ECONNRESET)
       return done;
     }
   }
@@ -133,45 +151,94 @@ void delay(unsigned long ms) { usleep((useconds_t)ms * 1000); }
 #endif
 #include HUBWIRE_SKETCH
 
-int main(int argc, char** argv) {
-  const char* link = nullptr;
-  for (int i = 1; i < argc; ++i) {
-    if (!strcmp(argv[i], "--link") && i + 1 < argc) {
-      link = argv[++i];
-    } else if (!strcmp(argv[i], "--board-id") && i + 1 < argc && parseBoardId(argv[i + 1])) {
-      ++i;
-    } else {
-      fprintf(stderr, "usage: %s --link PATH [--board-id HEX]\n", argv[0]);
-      return 2;
-    }
+namespace {
+// Serial as one TCP connection at a time on 127.0.0.1:port; returns the listening socket, or -1.
+int listenTcp(int port, int* bound) {
+  int s = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0);
+  int one = 1;
+  setsockopt(s, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
+  struct sockaddr_in a;
+  memset(&a, 0, sizeof(a));
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons((uint16_t)port);
+  socklen_t len = sizeof(a);
+  if (s < 0 || bind(s, (struct sockaddr*)&a, sizeof(a)) || listen(s, 1) ||
+      getsockname(s, (struct sockaddr*)&a, &len)) {
+    perror("tcp");
+    return -1;
   }
-  if (!link) {
-    fprintf(stderr, "usage: %s --link PATH [--board-id HEX]\n", argv[0]);
-    return 2;
-  }
-  clock_gettime(CLOCK_MONOTONIC, &started);
-  srand((unsigned)(time(nullptr) ^ getpid()));
+  *bound = ntohs(a.sin_port);
+  return s;
+}
 
+// A hub waiting to connect is taken once the last one has gone, as a WiFi sketch does.
+void acceptHub(int listener) {
+  if (Serial.attached()) return;
+  int c = accept4(listener, nullptr, nullptr, SOCK_NONBLOCK);
+  if (c < 0) return;
+  int one = 1;
+  setsockopt(c, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+  Serial.attach(c, true);
+}
+
+// Serial on a pty linked at link; returns the master, or -1. *slave is kept open by the caller.
+int openPty(const char* link, int* slave) {
   int master = posix_openpt(O_RDWR | O_NOCTTY);
   if (master < 0 || grantpt(master) || unlockpt(master)) {
     perror("pty");
-    return 1;
+    return -1;
   }
   const char* slaveName = ptsname(master);
   // Hold the slave open ourselves so the master never sees a hang-up between hub connections, and
   // make it raw: bytes pass unchanged, as on a real serial port.
-  int slave = open(slaveName, O_RDWR | O_NOCTTY);
+  *slave = open(slaveName, O_RDWR | O_NOCTTY);
   struct termios tio;
-  tcgetattr(slave, &tio);
+  tcgetattr(*slave, &tio);
   cfmakeraw(&tio);
-  tcsetattr(slave, TCSANOW, &tio);
+  tcsetattr(*slave, TCSANOW, &tio);
   fcntl(master, F_SETFL, fcntl(master, F_GETFL) | O_NONBLOCK);
-  Serial.attach(master);
-
   unlink(link);
   if (symlink(slaveName, link)) {
     perror("symlink");
-    return 1;
+    return -1;
+  }
+  return master;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const char* link = nullptr;
+  int tcpPort = -1;
+  for (int i = 1; i < argc; ++i) {
+    if (!strcmp(argv[i], "--link") && i + 1 < argc) {
+      link = argv[++i];
+    } else if (!strcmp(argv[i], "--tcp") && i + 1 < argc) {
+      tcpPort = atoi(argv[++i]);
+    } else if (!strcmp(argv[i], "--board-id") && i + 1 < argc && parseBoardId(argv[i + 1])) {
+      ++i;
+    } else {
+      link = nullptr;
+      tcpPort = -1;
+      break;
+    }
+  }
+  if (!link == (tcpPort < 0)) {
+    fprintf(stderr, "usage: %s (--link PATH | --tcp PORT) [--board-id HEX]\n", argv[0]);
+    return 2;
+  }
+  clock_gettime(CLOCK_MONOTONIC, &started);
+  srand((unsigned)(time(nullptr) ^ getpid()));
+  signal(SIGPIPE, SIG_IGN);  // a hub that hangs up makes write() fail, not the process die
+
+  int master = -1, slave = -1, listener = -1, port = 0;
+  if (link) {
+    master = openPty(link, &slave);
+    if (master < 0) return 1;
+    Serial.attach(master);
+  } else {
+    listener = listenTcp(tcpPort, &port);
+    if (listener < 0) return 1;
   }
   struct sigaction sa;
   memset(&sa, 0, sizeof(sa));
@@ -180,17 +247,35 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
   sa.sa_handler = onBumper;
   sigaction(SIGUSR2, &sa, nullptr);
+  sa.sa_handler = onDrop;
+  sigaction(SIGHUP, &sa, nullptr);
 
   setup();
-  printf("READY %s\n", link);
-  fflush(stdout);
-  while (running) {
-    loop();
-    struct pollfd p = {master, POLLIN, 0};
-    poll(&p, 1, 1);  // sleep until a byte arrives or 1 ms passes: a loop() at ~1 kHz, idle CPU low
+  if (link) {
+    printf("READY %s\n", link);
+  } else {
+    printf("READY socket://127.0.0.1:%d\n", port);
   }
-  unlink(link);
-  close(slave);
-  close(master);
+  fflush(stdout);
+  sig_atomic_t dropped = 0;
+  while (running) {
+    if (dropRequests != dropped) {
+      dropped = dropRequests;
+      if (Serial.attached() && listener >= 0) Serial.hangUp();
+    }
+    if (listener >= 0) acceptHub(listener);
+    loop();
+    // Sleep until a byte (or a hub) arrives or 1 ms passes: a loop() at ~1 kHz, idle CPU low.
+    struct pollfd p = {Serial.attached() ? Serial.fd() : listener, POLLIN, 0};
+    poll(&p, 1, 1);
+  }
+  if (link) {
+    unlink(link);
+    close(slave);
+    close(master);
+  } else {
+    if (Serial.attached()) Serial.hangUp();
+    close(listener);
+  }
   return 0;
 }

@@ -20,7 +20,7 @@ from hubwire.wire.frame import Frame, FrameDecoder, encode_frame
 from .conftest import REPO, Simuno, example_elf
 
 EXAMPLES = sorted(d for d in os.listdir(os.path.join(REPO, "examples"))
-                  if os.path.isdir(os.path.join(REPO, "examples", d)))
+                  if os.path.isfile(os.path.join(REPO, "examples", d, d + ".ino")))
 HUB_MAX = 255
 
 

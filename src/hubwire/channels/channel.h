@@ -1,6 +1,7 @@
 // What the session knows about a channel at run time: one ChannelInfo per channel, a constant in
 // flash that the compiler worked out from the sketch's declarations (declare.h). A channel costs
-// no RAM; the session copies its record onto the stack while it handles a frame for it.
+// no RAM on the boards HUBWIRE_FLASH covers (text.h: AVR, Teensy 4, and those that keep constants in
+// flash); the session copies its record onto the stack while it handles a frame for it.
 #ifndef HUBWIRE_CHANNELS_CHANNEL_H
 #define HUBWIRE_CHANNELS_CHANNEL_H
 

@@ -12,6 +12,7 @@
 #include "../wire/messages.h"
 #include "../wire/values.h"
 #include "channel.h"
+#include "../features.h"
 #include "json.h"
 
 namespace hubwire {
@@ -197,6 +198,14 @@ class Decl {
   // Does the session call a function for this channel: a control's or action's, or onChange()'s?
   constexpr bool hasCall() const { return K == kControl || K == kAction || (flags_ & kOnChangeGiven); }
   constexpr uint16_t memSize() const { return memSize_; }
+  // The session's features this channel needs (features.h).
+  constexpr uint16_t features() const {
+    return (uint16_t)((access_ & kStreamable ? kUsesStreams : 0) | (flags_ & kHasFailsafe ? kUsesFailsafes : 0) |
+                      (code_ == kStr ? kUsesStrings : 0) | (code_ == kStruct ? kUsesStructs : 0) |
+                      (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid ? kUsesReturns : 0) |
+                      (K == kEvent ? kUsesEvents : 0) | (flags_ & kHasRange ? kUsesRanges : 0) |
+                      (access_ & kWritable && K == kVariable ? kUsesWrites : 0) | (access_ & kReadable ? kUsesReads : 0));
+  }
 
  private:
   constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,

@@ -182,7 +182,7 @@ struct Json {
                                    {PartConst<HeadPart<D, Decls> >::value, decltype(JsonText<D, Decls>::body)::make()}};
 };
 template <typename D, const D* Decls>
-constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value HUBWIRE_FLASH;
+constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value;
 
 // The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
 // channel, so that the compiler's depth limit is far away.
@@ -211,29 +211,6 @@ struct LayoutPart {
   static constexpr size_t length() { return cx::length(DeclAt<D, Decls, I>::decl.layout()) + 1; }
   static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.layout()[i]; }
 };
-template <typename D, const D* Decls, size_t I>
-struct LayoutFlash {
-  static const Chars<LayoutPart<D, Decls, I> > value;
-};
-template <typename D, const D* Decls, size_t I>
-const Chars<LayoutPart<D, Decls, I> > LayoutFlash<D, Decls, I>::value HUBWIRE_FLASH = Chars<LayoutPart<D, Decls, I> >::make();
-
-// The function a control or action calls (or a variable's onChange), kept in flash with its own type.
-template <typename D, const D* Decls, size_t I>
-struct CallFlash {
-  typedef decltype(DeclAt<D, Decls, I>::decl.call()) Fn;
-  static const Fn value;
-};
-template <typename D, const D* Decls, size_t I>
-const typename CallFlash<D, Decls, I>::Fn CallFlash<D, Decls, I>::value HUBWIRE_FLASH = DeclAt<D, Decls, I>::decl.call();
-
-// A channel's range and failsafe values, in flash only for channels that declare them.
-template <typename D, const D* Decls, size_t I>
-struct LimitsFlash {
-  static const ChannelLimits value;
-};
-template <typename D, const D* Decls, size_t I>
-const ChannelLimits LimitsFlash<D, Decls, I>::value HUBWIRE_FLASH = DeclAt<D, Decls, I>::decl.limits();
 
 template <typename T, Kind K, typename C>
 constexpr bool isStruct(const Decl<T, K, C>*) { return false; }
@@ -250,68 +227,115 @@ struct Checked {
                 "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
 };
 
-// The flash copies a record points to, each instantiated (and so kept) only where it applies.
+// The flash copies a record points to: a struct's layout, the function called (with its own type),
+// range and failsafe values. Each is a base of the channel's Extra, empty where it does not apply,
+// so the sketch's one object of them all (Extras, HUBWIRE_CHANNELS defines it) holds only what does.
 template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((typename DeclAt<D, Decls, I>::Type*)nullptr)>
-struct StructOf {
-  static constexpr const char* layout() { return nullptr; }
+struct LayoutStore {
+  constexpr LayoutStore() {}
+  constexpr const char* layout() const { return nullptr; }
   static constexpr StructCodec codec() { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
-struct StructOf<D, Decls, I, true> {
+struct LayoutStore<D, Decls, I, true> {
   static_assert(layoutSize(DeclAt<D, Decls, I>::decl.layout()) == DeclAt<D, Decls, I>::decl.memSize(),
                 "struct layout does not match the struct: name:type[count] for every field, in order, "
                 "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
-  static constexpr const char* layout() { return LayoutFlash<D, Decls, I>::value.c; }
+  constexpr LayoutStore() : text(Chars<LayoutPart<D, Decls, I> >::make()) {}
+  constexpr const char* layout() const { return text.c; }
   static constexpr StructCodec codec() { return &structCodec; }
+  Chars<LayoutPart<D, Decls, I> > text;
 };
 template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.hasCall()>
-struct CallOf {
-  static constexpr const void* get() { return nullptr; }
+struct CallStore {
+  constexpr CallStore() {}
+  constexpr const void* call() const { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
-struct CallOf<D, Decls, I, true> {
-  static constexpr const void* get() { return &CallFlash<D, Decls, I>::value; }
+struct CallStore<D, Decls, I, true> {
+  constexpr CallStore() : fn(DeclAt<D, Decls, I>::decl.call()) {}
+  constexpr const void* call() const { return &fn; }
+  decltype(DeclAt<D, Decls, I>::decl.call()) fn;
 };
 template <typename D, const D* Decls, size_t I, bool HasLimits = DeclAt<D, Decls, I>::decl.hasLimits()>
-struct LimitsOf {
-  static constexpr const ChannelLimits* get() { return nullptr; }
+struct LimitsStore {
+  constexpr LimitsStore() {}
+  constexpr const ChannelLimits* limits() const { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
-struct LimitsOf<D, Decls, I, true> {
-  static constexpr const ChannelLimits* get() { return &LimitsFlash<D, Decls, I>::value; }
+struct LimitsStore<D, Decls, I, true> {
+  constexpr LimitsStore() : lim(DeclAt<D, Decls, I>::decl.limits()) {}
+  constexpr const ChannelLimits* limits() const { return &lim; }
+  ChannelLimits lim;
+};
+template <typename D, const D* Decls, size_t I>
+struct Extra : LayoutStore<D, Decls, I>, CallStore<D, Decls, I>, LimitsStore<D, Decls, I> {
+  constexpr Extra() {}
+};
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>
+struct Extras;
+template <typename D, const D* Decls>
+struct Extras<D, Decls, cx::Seq<> > {
+  constexpr Extras() {}
+};
+template <typename D, const D* Decls, size_t I, size_t... R>
+struct Extras<D, Decls, cx::Seq<I, R...> > : Extra<D, Decls, I>, Extras<D, Decls, cx::Seq<R...> > {
+  constexpr Extras() {}
 };
 
 template <typename D, const D* Decls, size_t I>
 struct InfoOf : Checked<D, Decls, I> {
-  static constexpr ChannelInfo make() {
-    return DeclAt<D, Decls, I>::decl.info(StructOf<D, Decls, I>::layout(), StructOf<D, Decls, I>::codec(),
-                                       CallOf<D, Decls, I>::get(), LimitsOf<D, Decls, I>::get());
+  static constexpr ChannelInfo make(const Extra<D, Decls, I>& e) {
+    return DeclAt<D, Decls, I>::decl.info(e.layout(), LayoutStore<D, Decls, I>::codec(), e.call(), e.limits());
   }
 };
 
+template <size_t N>
+struct InfoArray {
+  ChannelInfo v[N];
+};
 template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>
 struct Infos;
 template <typename D, const D* Decls, size_t... I>
 struct Infos<D, Decls, cx::Seq<I...> > {
-  static const ChannelInfo value[sizeof...(I) ? sizeof...(I) : 1];
+  typedef InfoArray<sizeof...(I) ? sizeof...(I) : 1> Type;
+  static constexpr Type make(const Extras<D, Decls>& e) { return Type{{InfoOf<D, Decls, I>::make(e)...}}; }
 };
-template <typename D, const D* Decls, size_t... I>
-const ChannelInfo Infos<D, Decls, cx::Seq<I...> >::value[sizeof...(I) ? sizeof...(I) : 1] HUBWIRE_FLASH = {
-    InfoOf<D, Decls, I>::make()...};
 
+// The JSON (after its digest), the records and what they point to, as HUBWIRE_CHANNELS stores them:
+// in objects of the sketch's own, not as members of these templates, because GCC ignores a section
+// attribute on a template's static member (it keeps it in .rodata, which Teensy 4 copies to RAM).
 template <typename D, const D* Decls>
-constexpr ChannelTable table() {
+struct Stored {
+  typedef typename Json<D, Decls>::Stored JsonType;
+  typedef Extras<D, Decls> ExtrasType;
+  typedef typename Infos<D, Decls>::Type InfosType;
+  static constexpr JsonType json() { return Json<D, Decls>::value; }
+  static constexpr InfosType infos(const ExtrasType& e) { return Infos<D, Decls>::make(e); }
+};
+
+// The features of the whole list (features.h).
+constexpr uint16_t featuresOf(const List<>&) { return 0; }
+template <typename H, typename... R>
+constexpr uint16_t featuresOf(const List<H, R...>& l) {
+  return (uint16_t)(l.head.features() | featuresOf(l.tail));
+}
+
+// json and infos: the sketch's copies of Stored<D, Decls>::json() and infos(), in flash.
+template <typename D, const D* Decls>
+constexpr ChannelTable table(const typename Stored<D, Decls>::JsonType& json,
+                             const typename Stored<D, Decls>::InfosType& infos) {
   static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
                 "a name, unit, description, layout or firmware text longer than 255 characters");
   static_assert(namesUnique(Decls->list), "two channels have the same name");
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
   static_assert(sizeof(JsonAndDigest<D, Decls>) == sizeof(JsonText<D, Decls>) + kDigestSize,
                 "the JSON follows the digest without a gap");
-  return ChannelTable{Json<D, Decls>::value.text.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
+  return ChannelTable{json.text.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
                       hashOf(Json<D, Decls>::value.text.body,
                              fnvChars(Json<D, Decls>::value.text.head.c, sizeof(Json<D, Decls>::value.text.head.c),
                                       kFnvOffset)),
-                      Infos<D, Decls>::value,
+                      infos.v,
                       D::size()};
 }
 

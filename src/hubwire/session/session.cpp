@@ -1,5 +1,6 @@
 #include "session.h"
 
+#include "../features.h"
 #include "../wire/bytes.h"
 
 namespace hubwire {
@@ -38,7 +39,7 @@ bool Session::begin(const ChannelTable& channels, uint32_t seed) {
   started_ = false;
   if (table_.count == 0) return false;
   // Events learn their ids: emit() names the event by its handle.
-  for (uint8_t id = 1; id <= table_.count; ++id) {
+  for (uint8_t id = 1; uses(kUsesEvents) && id <= table_.count; ++id) {
     ChannelInfo ch;
     find(id, ch);
     if (ch.access & kEventAccess) *(uint8_t*)ch.data = id;
@@ -55,6 +56,7 @@ bool Session::begin(const ChannelTable& channels, uint32_t seed) {
 // once per link loss whether or not the value changed, as after a hub's write; a control with one
 // is called with it. Either way: as if the hub had sent it.
 void Session::applyFailsafes() {
+  if (!uses(kUsesFailsafes)) return;
   for (uint8_t id = 1; id <= table_.count; ++id) {
     ChannelInfo ch;
     find(id, ch);
@@ -74,18 +76,15 @@ void Session::applyFailsafes() {
 }
 
 // Drawn once per boot, at the first hub hello (or the first announcement if none came first):
-// the per-boot seed, the microsecond clock, and the hub's random nonce, which differs for every
-// connection even where a simulated or freshly powered board repeats everything else.
+// the per-boot seed, the microsecond clock (its fast bits moved up, away from a boot counter's),
+// and the hub's random nonce, which differs for every connection even where a simulated or freshly
+// powered board repeats everything else. Mixing by xor is enough: any one part differing makes the
+// nonce differ, and the hub needs no more than that (docs/PROTOCOL.md 4).
 void Session::drawNonce(uint32_t hubNonce) {
-  uint32_t h = mixNonce(mixNonce(mixNonce(kFnvOffset, nonce_), portMicros(port_)), hubNonce);
+  uint32_t t = portMicros(port_);
+  uint32_t h = nonce_ ^ hubNonce ^ ((t << 16) | (t >> 16));
   nonce_ = h ? h : 1;  // never 0: the protocol reserves it
   nonceDrawn_ = true;
-}
-
-// FNV-1a over the four bytes of v, least significant first.
-uint32_t Session::mixNonce(uint32_t h, uint32_t v) {
-  for (uint8_t i = 0; i < 4; ++i, v >>= 8) h = fnv1a(h, (uint8_t)v);
-  return h;
 }
 
 void Session::update() {
@@ -115,8 +114,8 @@ void Session::update() {
     return;
   }
   if (!beatSent_ || (uint16_t)(now - lastSent_) >= HUBWIRE_HEARTBEAT_MS) sendHeartbeat(now);
-  if (events_.due(now)) sendEvent(now);
-  sendSamples(now);
+  if (uses(kUsesEvents) && events_.due(now)) sendEvent(now);
+  if (uses(kUsesStreams)) sendSamples(now);
 }
 
 void Session::handle(const Frame& f) {
@@ -210,7 +209,7 @@ void Session::newHubSession(uint32_t nonce) {
   hubNonce_ = nonce;
   lastTxnValid_ = false;
 #if HUBWIRE_MAX_STREAMS > 0
-  streams_.clear();
+  if (uses(kUsesStreams)) streams_.clear();
 #endif
 }
 
@@ -218,7 +217,7 @@ void Session::loseLink() {
   linked_ = false;
   applyFailsafes();
 #if HUBWIRE_MAX_STREAMS > 0
-  streams_.clear();
+  if (uses(kUsesStreams)) streams_.clear();
 #endif
   lastSent_ = ms();
   if (onLinkLost_) onLinkLost_();
@@ -226,7 +225,7 @@ void Session::loseLink() {
 
 void Session::onAck(const Frame& f, bool nak) {
   (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
-  events_.acked(f.seq, f.id);
+  if (uses(kUsesEvents)) events_.acked(f.seq, f.id);
 }
 
 void Session::onChunk(const Frame& f) {
@@ -254,7 +253,7 @@ void Session::onRequest(const Frame& f) {
     if (n) return reply(kMsgResponse, f, n);
     return sendNak(f, kErrUnknownChannel);
   }
-  if (!(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
+  if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
   // Not sent at all when the hub could not take it (its hello said how much it accepts).
   if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
   reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
@@ -271,7 +270,7 @@ void Session::onControl(const Frame& f) {
   } else {
     const ValueType& t = ch.type;
     code = t.check(f.payload, f.len);
-    if (code == kOk && (ch.flags & kHasRange)) {
+    if (code == kOk && uses(kUsesRanges) && (ch.flags & kHasRange)) {
       ChannelLimits lim;
       fromFlash(&lim, ch.limits, sizeof(lim));
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
@@ -279,15 +278,15 @@ void Session::onControl(const Frame& f) {
         if (!lim.inRange(f.payload + i * size, &lim.min, &lim.max)) code = kErrOutOfRange;
     }
     if (code == kOk) {
-      if (ch.thunk) {
+      if (uses(kUsesCalls) && ch.thunk) {
         uint8_t* ret = tx_.payload();
         if (!ch.thunk(ch.call, f.payload, ret)) {
           code = kErrRejected;
-        } else if (ch.ret != kVoid) {
+        } else if (uses(kUsesReturns) && ch.ret != kVoid) {
           type = kMsgResponse;
           len = scalarSize(ch.ret);
         }
-      } else {
+      } else if (uses(kUsesWrites)) {
         t.fromWire(f.payload, f.len, ch.data);
         if (ch.call) functionAt<void (*)()>(ch.call)();
       }
@@ -307,7 +306,7 @@ void Session::onControl(const Frame& f) {
 void Session::onSubscribe(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
-  if (!(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
+  if (!uses(kUsesStreams) || !(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
   if (f.len != 2 || ch.type.wireSize() + kSampleHeader > maxOut()) return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0

@@ -2,8 +2,9 @@
 // events and streams (docs/PROTOCOL.md 3-4), over the Port seam (port.h).
 //
 // The channels come from HUBWIRE_CHANNELS (../channels/declare.h): the descriptor JSON and one
-// record per channel, constants in flash. Nothing about a channel is copied into RAM, so a channel
-// costs flash only: that is what lets an Uno with 2 KB of SRAM carry a dozen described channels.
+// record per channel, constants in flash (HUBWIRE_FLASH, text.h: also on Teensy 4, which would copy
+// plain constants to RAM). Nothing about a channel is copied into RAM, so a channel costs flash
+// only: that is what lets an Uno with 2 KB of SRAM carry a dozen described channels.
 #ifndef HUBWIRE_SESSION_SESSION_H
 #define HUBWIRE_SESSION_SESSION_H
 
@@ -160,7 +161,6 @@ class Session : private SessionState {
   void loseLink();
   void sendHello(bool reply);
   void drawNonce(uint32_t hubNonce);
-  static uint32_t mixNonce(uint32_t h, uint32_t v) HUBWIRE_NOINLINE;
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }

@@ -9,17 +9,17 @@
 namespace hubwire {
 
 void FrameReceiver::reset() {
-  len_ = 0;
+  at_ = buf_;
   left_ = 0;
+  beyond_ = 0;
   pendingZero_ = false;
-  overflow_ = false;
   started_ = false;
 }
 
 bool FrameReceiver::feedSlow(uint8_t byte) {
   if (byte == 0) {  // delimiter: judge what was collected, then start afresh
-    bool wasStarted = started_, overflowed = overflow_, complete = (left_ == 0);
-    uint16_t len = len_;
+    bool wasStarted = started_, overflowed = beyond_ == kOverflowed, complete = (left_ == 0 && beyond_ == 0);
+    uint16_t len = (uint16_t)(at_ - buf_);
     reset();
     if (!wasStarted) return false;  // lone delimiter: a sender flushing line noise
     if (overflowed) {
@@ -39,25 +39,24 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
     return true;
   }
   started_ = true;
-  if (overflow_) return false;  // skip to the delimiter
-  if (left_ == 0) {             // a code byte opens the next block
-    if (pendingZero_) {
-      if (len_ >= cap_) {
-        overflow_ = true;
-        return false;
-      }
-      buf_[len_++] = 0;
+  if (beyond_ != 0) {  // a data byte past the end of the buffer, or one after it: skip to the delimiter
+    beyond_ = kOverflowed;
+    return false;
+  }
+  // A code byte opens the next block: the zero the last one implied, then up to code - 1 bytes,
+  // as many of them as fit counted in left_, the rest in beyond_.
+  if (pendingZero_) {
+    if (at_ >= end_) {
+      beyond_ = kOverflowed;
+      return false;
     }
-    left_ = (uint8_t)(byte - 1);
-    pendingZero_ = (byte != 0xFF);
-    return false;
+    *at_++ = 0;
   }
-  if (len_ >= cap_) {
-    overflow_ = true;
-    return false;
-  }
-  buf_[len_++] = byte;
-  --left_;
+  uint8_t n = (uint8_t)(byte - 1);
+  uint16_t room = (uint16_t)(end_ - at_);
+  left_ = room < n ? (uint8_t)room : n;
+  beyond_ = (uint8_t)(n - left_);
+  pendingZero_ = (byte != 0xFF);
   return false;
 }
 

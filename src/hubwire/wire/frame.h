@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "../config.h"
 #include "../port.h"
 
 namespace hubwire {
@@ -36,13 +37,14 @@ struct LinkCounters {
 class FrameReceiver {
  public:
   // buffer holds capacity raw bytes: HUBWIRE_RAW_FRAME_SIZE(largest accepted payload).
-  FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), cap_(capacity) { reset(); }
+  FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), end_(buffer + capacity) { reset(); }
 
   // Takes one byte; true when it completed a valid frame, which frame() then describes.
-  // Most bytes are data inside a COBS block: that case is inline, the rest is feedSlow().
-  bool feed(uint8_t byte) {
-    if (byte != 0 && left_ != 0 && len_ < cap_) {
-      buf_[len_++] = byte;
+  // Most bytes are data inside a COBS block that fit the buffer: that case is a store and a count,
+  // always inline (the receive loop runs it per byte); the rest is feedSlow().
+  HUBWIRE_ALWAYS_INLINE bool feed(uint8_t byte) {
+    if (byte != 0 && left_ != 0) {
+      *at_++ = byte;
       --left_;
       return false;
     }
@@ -60,13 +62,15 @@ class FrameReceiver {
 
  private:
   bool feedSlow(uint8_t byte);
+  static const uint8_t kOverflowed = 0xFF;
 
   uint8_t* buf_;
-  uint16_t cap_;
-  uint16_t len_;
-  uint8_t left_;         // bytes left in the current COBS block; 0 = next byte is a code byte
+  uint8_t* end_;         // just past the buffer
+  uint8_t* at_;          // where the next decoded byte goes
+  uint8_t left_;         // bytes of the current COBS block still to come that fit the buffer
+  uint8_t beyond_;       // ... and that do not (the frame overflows if one arrives); kOverflowed
+                         // once one did (a block holds at most 254)
   bool pendingZero_;     // the current block ends with an implied zero (code < 0xFF)
-  bool overflow_;
   bool started_;         // any byte since the last delimiter
   uint8_t frameLen_;     // payload length of the last completed frame
 };

@@ -2,6 +2,8 @@
 
 #include <string.h>
 
+#include "../features.h"
+
 namespace hubwire {
 
 namespace {
@@ -175,49 +177,49 @@ uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16
 }
 
 uint16_t ValueType::wireSize() const {
-  if (code == kStr) return (uint16_t)(1 + count);
-  if (code == kStruct) return structs(kStructWireSize, layout, nullptr, nullptr, 0);
+  if (uses(kUsesStrings) && code == kStr) return (uint16_t)(1 + count);
+  if (uses(kUsesStructs) && code == kStruct) return structs(kStructWireSize, layout, nullptr, nullptr, 0);
   return (uint16_t)(scalarSize(code) * (count ? count : 1));
 }
 
 uint16_t ValueType::memSize() const {
-  if (code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
-  if (code == kStruct) return structs(kStructMemSize, layout, nullptr, nullptr, 0);
+  if (uses(kUsesStrings) && code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
+  if (uses(kUsesStructs) && code == kStruct) return structs(kStructMemSize, layout, nullptr, nullptr, 0);
   return wireSize();
 }
 
 uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
   const uint8_t* m = (const uint8_t*)mem;
-  if (code == kStr) {
+  if (uses(kUsesStrings) && code == kStr) {
     uint8_t n = 0;
     while (n < count && m[n]) ++n;
     wire[0] = n;
     memcpy(wire + 1, m, n);
     return (uint16_t)(n + 1);
   }
-  if (code == kStruct) return structs(kStructToWire, layout, mem, wire, 0);
+  if (uses(kUsesStructs) && code == kStruct) return structs(kStructToWire, layout, mem, wire, 0);
   uint16_t n = wireSize();
   memcpy(wire, m, n);
   return n;
 }
 
 ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
-  if (code == kStr) {  // the length byte is judged first, then the payload against it
+  if (uses(kUsesStrings) && code == kStr) {  // the length byte is judged first, then the payload against it
     if (len < 1) return kErrBadLength;
     if (wire[0] > count) return kErrBadValue;
     return len == 1u + wire[0] ? kOk : kErrBadLength;
   }
-  if (code == kStruct) return (ErrorCode)structs(kStructCheck, layout, wire, nullptr, len);
+  if (uses(kUsesStructs) && code == kStruct) return (ErrorCode)structs(kStructCheck, layout, wire, nullptr, len);
   if (len != wireSize()) return kErrBadLength;
   return boolsValid(code, wire, len) ? kOk : kErrBadValue;
 }
 
 void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
   uint8_t* m = (uint8_t*)mem;
-  if (code == kStr) {
+  if (uses(kUsesStrings) && code == kStr) {
     memcpy(m, wire + 1, wire[0]);
     m[wire[0]] = 0;
-  } else if (code == kStruct) {
+  } else if (uses(kUsesStructs) && code == kStruct) {
     structs(kStructFromWire, layout, wire, mem, len);
   } else {
     memcpy(m, wire, len);

@@ -39,10 +39,19 @@ class EmulatedSerial : public Stream {
   size_t write(uint8_t b) override { return write(&b, 1); }
   size_t write(const uint8_t* data, size_t len) override;
   int availableForWrite() override { return 4096; }
-  void attach(int fd) { fd_ = fd; }
+  // fd: a pty master, or (socket) a hub's TCP connection, closed when the hub hangs up.
+  void attach(int fd, bool socket = false) {
+    fd_ = fd;
+    socket_ = socket;
+    peeked_ = -1;
+  }
+  bool attached() const { return fd_ >= 0; }
+  int fd() const { return fd_; }
+  void hangUp();
 
  private:
   int fd_ = -1;
+  bool socket_ = false;
   int peeked_ = -1;
 };
 extern EmulatedSerial Serial;
