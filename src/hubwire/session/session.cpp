@@ -1,5 +1,6 @@
 #include "session.h"
 
+#include "../channels/hub_table.h"
 #include "../wire/bytes.h"
 
 namespace hubwire {
@@ -8,6 +9,12 @@ namespace {
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
 const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: the sender stopped
 }  // namespace
+
+// The hub link's hooks (hub_link.cpp): without hub channels hubTable() is a constant nullptr, the
+// link-time optimiser drops every call, and the sketch links none of the hub link (hub_table.h).
+__attribute__((always_inline)) static inline bool hubHook(Session& s, const Frame* f) {
+  return hubTable() && HubwireHub<true, void>::dispatch(s, f);
+}
 
 Session::Session(Port& port)
     : SessionState(),  // all zero
@@ -107,6 +114,7 @@ void Session::update() {
     rx_.reset();
     ++rx_.counters.dropped;
   }
+  hubHook(*this, nullptr);  // sends and retries the sketch's requests
   if (!linked_) {
     if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
       lastSent_ = now;
@@ -121,6 +129,7 @@ void Session::update() {
 
 void Session::handle(const Frame& f) {
   lastRx_ = ms();
+  if (hubHook(*this, &f)) return;  // frames of the hub link
   switch (f.type) {
     case kMsgHello:
       onHello(f);
