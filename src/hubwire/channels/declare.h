@@ -42,9 +42,9 @@
   bool ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                                \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
                       hubwire_channels_##var::Tag>::type>::dispatch(::hubwire::Session& s,         \
-                                                                    const ::hubwire::Frame* f) { \
+                                                                    bool frame) { \
     return ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                           \
-                                          &hubwire_channels_##var::declared>::dispatch(s, f); \
+                                          &hubwire_channels_##var::declared>::dispatch(s, frame); \
   }                                                                                                \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>()

@@ -18,8 +18,7 @@ namespace hubwire {
 // The hub channels of the one table that declares them: hub id k is channels[k - 1]. owner is the
 // device channel array of the same table (ChannelTable::channels), which tells its session.
 class Session;
-struct Frame;
-bool hubDispatch(Session& s, const ::hubwire::Frame* f);  // session/hub_link.cpp
+bool hubDispatch(Session& s, bool frame);  // session/hub_link.cpp
 
 struct HubTable {
   const ChannelInfo* channels;
@@ -35,12 +34,12 @@ struct HubTable {
 template <bool Declared, typename Tag>
 struct HubwireHub {
   static const ::hubwire::HubTable* const table;
-  static bool dispatch(::hubwire::Session& s, const ::hubwire::Frame* f);
+  static bool dispatch(::hubwire::Session& s, bool frame);
 };
 template <>
 const ::hubwire::HubTable* const HubwireHub<true, void>::table;
 template <>
-__attribute__((weak)) bool HubwireHub<true, void>::dispatch(::hubwire::Session& s, const ::hubwire::Frame* f);
+__attribute__((weak)) bool HubwireHub<true, void>::dispatch(::hubwire::Session& s, bool frame);
 template <bool Declared, typename Tag>
 struct HubwireHubTag {
   typedef void type;
@@ -113,12 +112,12 @@ const HubTable HubTableFlash<D, Decls>::value HUBWIRE_FLASH = {
 template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
 struct HubTableOf {
   static constexpr const HubTable* get() { return nullptr; }
-  static bool dispatch(Session&, const Frame*) { return false; }
+  static bool dispatch(Session&, bool) { return false; }
 };
 template <typename D, const D* Decls>
 struct HubTableOf<D, Decls, true> {
   static constexpr const HubTable* get() { return &HubTableFlash<D, Decls>::value; }
-  static bool dispatch(Session& s, const ::hubwire::Frame* f) { return hubDispatch(s, f); }
+  static bool dispatch(Session& s, bool frame) { return hubDispatch(s, frame); }
 };
 
 }  // namespace declare

@@ -27,10 +27,10 @@ void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len) {
 
 // ---- the session's two hooks (session.cpp) ----
 
-// f: a frame, true when it was the hub link's; nullptr: time to send and retry (from update()).
-bool hubDispatch(Session& s, const Frame* f) {
+// frame: the frame just received (true when it was the hub link's); else time to send and retry.
+bool hubDispatch(Session& s, bool frame) {
   if (!s.hubMine()) return false;
-  if (f) return s.hubFrame(*f);
+  if (frame) return s.hubFrame(s.rx_.frame());
   s.hubPoll(s.ms());
   return false;
 }

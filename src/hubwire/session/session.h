@@ -205,7 +205,7 @@ class Session : private SessionState {
 
  private:
   // The hub's own channels (hub_link.cpp), reached only through the sketch's hub table.
-  friend bool hubDispatch(Session& s, const Frame* f);
+  friend bool hubDispatch(Session& s, bool frame);
   bool hubMine();
   bool hubQueue(uint8_t type, const void* var, HubDone done, HubFail fail);
   bool hubCall(const void* handle, const void* arg, uint8_t len, HubDone done, HubFail fail, HubDeliver deliver);
