@@ -72,6 +72,7 @@ class HubLink {
   uint8_t head, queued;
   uint8_t counter;  // the device's transaction counter: its events and its R, C, J
   uint8_t headSeq;
+  bool eventNumbered;  // the head event, not sent yet, has its seq from counter
   bool hubKnown;    // hubNonce: the hub session the link last saw
   uint32_t hubNonce;
   bool bound;       // the bind report of this hub session has arrived

@@ -302,12 +302,11 @@ void Session::onControl(const Frame& f) {
     }
   }
   if (code != kOk) {
-    if (f.id == 0 && hubHook(*this, true)) return;  // the bind report (hub_link.cpp)
     type = kMsgNak;
     len = 1;
     tx_.payload()[0] = code;
   }
-  hubHook(*this, true);  // the hub link notes every control
+  if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
   memcpy(replyData_, tx_.payload(), len);
