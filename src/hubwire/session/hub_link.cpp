@@ -29,6 +29,7 @@ void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len) {
 // frame: the frame just received (true when it was the hub link's); else time to send and retry.
 bool hubDispatch(Session& s, bool frame) {
   if (!s.hubMine()) return false;
+  s.hubSessionCheck();
   if (frame) return s.hubFrame(s.rx_.frame());
   s.hubPoll(s.ms());
   return false;
@@ -48,26 +49,24 @@ bool Session::hubMine() {
   return true;
 }
 
+// A new hub session (the session took a new hub nonce): the hub binds again and numbers its events
+// afresh.
+void Session::hubSessionCheck() {
+  HubLink& l = hubLink;
+  if (!hubKnown_ || (l.hubKnown && hubNonce_ == l.hubNonce)) return;
+  l.hubKnown = true;
+  l.hubNonce = hubNonce_;
+  l.bound = false;
+  l.bind.state = kBindPending;
+  l.eventValid = false;
+  l.controlValid = false;
+}
+
 // True when the frame was the hub link's to handle; false lets the session handle it as before.
 bool Session::hubFrame(const Frame& f) {
   HubLink& l = hubLink;
   const uint8_t* p = f.payload;
   switch (f.type) {
-    case kMsgHello:
-      if (f.len >= kHelloSize && p[0] == kProtocolVersion && !(p[1] & kHelloDevice)) {
-        l.hubHash = loadU32(p + 10);
-        l.hubLength = loadU16(p + 14);
-        uint32_t nonce = loadU32(p + 2);
-        if (!l.hubKnown || nonce != l.hubNonce) {  // a new hub session: bind again, events afresh
-          l.hubKnown = true;
-          l.hubNonce = nonce;
-          l.bound = false;
-          l.bind.state = kBindPending;
-          l.eventValid = false;
-          l.controlValid = false;
-        }
-      }
-      return false;
     case kMsgHeartbeat:
       if (f.len >= kHeartbeatSize) {
         ++l.health.beats;

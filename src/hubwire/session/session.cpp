@@ -131,11 +131,10 @@ void Session::handle(const Frame& f) {
   lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
-      hubHook(*this, true);  // the hub link notes the hub's session and descriptor (hub_link.cpp)
       onHello(f);
       return;
     case kMsgHeartbeat:
-      hubHook(*this, true);  // ... and its health
+      hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
       return;
     case kMsgAck:
