@@ -134,8 +134,8 @@ void Session::handle(const Frame& f) {
       onHello(f);
       return;
     case kMsgHeartbeat:
-      hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
     case kMsgNak:
