@@ -135,7 +135,7 @@ void Session::handle(const Frame& f) {
       return;
     case kMsgHeartbeat:
       if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
-      hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
+      else hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
     case kMsgNak:
