@@ -89,7 +89,8 @@ void plain() { ++calls; }
 
 }  // namespace
 
-// At file scope, as in a sketch (the macro defines hubwire::sketchFeatures).
+// At file scope, as in a sketch (the macro defines hubwire::sketchFeatures): the declarations specialise a template of the global namespace,
+// which clang allows only from a namespace that encloses it.
 HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   expose("b", vBool).writable().failsafe(0).onChange(changed),
   expose("u8", vU8).writable().streamable().range(0, 200).unit("x"),

@@ -39,6 +39,7 @@ def _sibling(name: str) -> Any:
 
 
 session_rules = _sibling("session_rules")  # the session rules of PROTOCOL.md section 8
+both_frames = _sibling("both_frames")  # frames of both directions (PROTOCOL.md 10)
 
 # ---------------------------------------------------------------------------------------------- CRC
 
@@ -521,6 +522,7 @@ def main() -> int:
         "values.json": values,
         "values_invalid.json": invalid,
         "session/rules.json": session_rules.gen(),  # a folder of its own: the wire suites load *.json here
+        "both/frames.json": both_frames.gen(),  # likewise: frames of both directions, with a direction
     }
     changed = []
     for name, doc in files.items():

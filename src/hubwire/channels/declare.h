@@ -11,26 +11,57 @@
 #ifndef HUBWIRE_CHANNELS_DECLARE_H
 #define HUBWIRE_CHANNELS_DECLARE_H
 
-// One job a header: the declarations a sketch writes (dsl.h), the JSON they become (json.h; a
-// struct's layout: layout.h), and the flash tables with their checks (tables.h).
+// One job a header: the declarations a sketch writes (dsl.h; what it expects of the hub: remote.h),
+// the JSON they become (json.h; a struct's layout: layout.h), the flash tables with their checks
+// (tables.h) and the hub channels' table (hub_table.h).
 #include "dsl.h"
+#include "remote.h"
 #include "tables.h"
+#include "hub_table.h"
+
+// The <false, tag> specialisations below exist only to keep the macro's text the same for every
+// sketch: nothing reads them.
+#if defined(__GNUC__)
+#define HUBWIRE_UNUSED __attribute__((unused))
+#else
+#define HUBWIRE_UNUSED
+#endif
 
 /// Declares a sketch's channels at file scope, outside any namespace (it defines
 /// hubwire::sketchFeatures, features.h); `var` is then what begin() takes. After the device:
-/// expose(), control(), action() and event() (dsl.h), with their options.
+/// expose(), control(), action() and event() (dsl.h), with their options, and what the sketch
+/// expects of the hub: remote(), remoteAction() and remoteEvent() (remote.h).
 ///   HUBWIRE_CHANNELS(channels, "minimal", expose("blink_ms", blinkMs).writable(), event("button", button));
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
   constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
-  constexpr uint16_t features = ::hubwire::declare::featuresOf(declared.list);                     \
+  /* the hub channels' values pass through the same value code (strings, structs) */               \
+  constexpr uint16_t features =                                                                    \
+      (uint16_t)(::hubwire::declare::featuresOf(declared.list) | ::hubwire::declare::featuresOf(declared.hub)); \
   typedef ::hubwire::declare::Stored<decltype(declared), &declared> Stored;                        \
   const Stored::JsonType json HUBWIRE_FLASH = Stored::json();                                      \
   const Stored::ExtrasType extras HUBWIRE_FLASH = Stored::ExtrasType();                            \
   const Stored::InfosType infos HUBWIRE_FLASH = Stored::infos(extras);                             \
+  typedef decltype(declared) Decls;                                                                \
+  namespace {                                                                                      \
+  struct Tag {};                                                                                   \
+  }                                                                                                \
   }                                                                                                \
   HUBWIRE_SKETCH_FEATURES(hubwire_channels_##var::features)                                        \
+  template <>                                                                                      \
+  const ::hubwire::HubTable* const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),    \
+      ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
+                      hubwire_channels_##var::Tag>::type>::table HUBWIRE_UNUSED =                  \
+      ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls, &hubwire_channels_##var::declared>:: \
+          get<hubwire_channels_##var::Stored::InfosType, &hubwire_channels_##var::infos>();        \
+  template <>                                                                                      \
+  bool (*const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                        \
+      ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
+                      hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, bool)    \
+      HUBWIRE_UNUSED =                                                                             \
+      ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
+                                     &hubwire_channels_##var::declared>::dispatch();               \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>( \
           hubwire_channels_##var::json, hubwire_channels_##var::infos)

@@ -1,5 +1,6 @@
 #include "session.h"
 
+#include "../channels/hub_table.h"
 #include "../features.h"
 #include "../wire/bytes.h"
 
@@ -9,6 +10,12 @@ namespace {
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
 const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: the sender stopped
 }  // namespace
+
+// The hub link's hooks (hub_link.cpp): without hub channels hubTable() is a constant nullptr, the
+// link-time optimiser drops every call, and the sketch links none of the hub link (hub_table.h).
+__attribute__((always_inline)) static inline bool hubHook(Session& s, bool frame) {
+  return HubwireHub<true, void>::dispatch && HubwireHub<true, void>::dispatch(s, frame);
+}
 
 Session::Session(Port& port)
     : SessionState(),  // all zero
@@ -106,6 +113,7 @@ void Session::update() {
     rx_.reset();
     ++rx_.counters.dropped;
   }
+  hubHook(*this, false);  // sends and retries the sketch's requests
   if (!linked_) {
     if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
       lastSent_ = now;
@@ -126,6 +134,7 @@ void Session::handle(const Frame& f) {
       return;
     case kMsgHeartbeat:
       if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      else hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
     case kMsgNak:
@@ -137,6 +146,7 @@ void Session::handle(const Frame& f) {
     case kMsgSubscribe:
       break;
     default:
+      if (hubHook(*this, true)) return;  // hub events, answers to the device's requests
       ++rx_.counters.dropped;
       sendNak(f, kErrUnknownType);
       return;
@@ -225,11 +235,15 @@ void Session::loseLink() {
 
 void Session::onAck(const Frame& f, bool nak) {
   (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
-  if (uses(kUsesEvents)) events_.acked(f.seq, f.id);
+  if (uses(kUsesEvents) && events_.acked(f.seq, f.id)) return;
+  hubHook(*this, true);  // an answer to the device's own request?
 }
 
 void Session::onChunk(const Frame& f) {
-  if (f.len != kChunkRequestSize) return sendNak(f, kErrBadLength);
+  if (f.len != kChunkRequestSize) {
+    if (hubHook(*this, true)) return;  // a chunk of the hub's descriptor (hub_link.cpp)
+    return sendNak(f, kErrBadLength);
+  }
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
   uint16_t total = table_.jsonLength;
@@ -297,6 +311,7 @@ void Session::onControl(const Frame& f) {
     len = 1;
     tx_.payload()[0] = code;
   }
+  if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
   memcpy(replyData_, tx_.payload(), len);
