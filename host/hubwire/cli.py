@@ -1,4 +1,4 @@
-"""``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``)."""
+"""``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``), dashboard."""
 from __future__ import annotations
 
 import argparse
@@ -157,6 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wait for the board to appear and to come back when it goes away (default: end with "
                         "an error once it has been gone for --timeout seconds)")
     s.set_defaults(fn=cmd_watch)
+    from .dashboard.cli import add_parser as add_dashboard  # imports NiceGUI only when run
+
+    add_dashboard(sub, [common])
     return p
 
 

@@ -1,0 +1,76 @@
+"""``hubwire dashboard PORTS... --http PORT``: the dashboard on boards opened directly (without the
+service)."""
+from __future__ import annotations
+
+import argparse
+import asyncio
+import sys
+from typing import Any, List
+
+from .server import DEFAULT_PORT, resolve_token, run_dashboard
+
+__all__ = ["add_parser", "cmd_dashboard", "board_ports"]
+
+
+def add_parser(sub: Any, parents: List[argparse.ArgumentParser]) -> None:
+    s = sub.add_parser(
+        "dashboard", parents=parents, help="every board live in the browser (pip install 'hubwire[dashboard]')",
+        description="Serve a web page showing each board: live values and plots, inputs for writable "
+                    "channels, action buttons, events, link health and the descriptor. Listens on "
+                    "this machine only unless --host says otherwise; then a token is required.")
+    s.add_argument("ports", nargs="*", metavar="PORT",
+                   help="serial ports or pyserial URLs of the boards (default: every port with a known board "
+                        "USB id); a port that is absent yet is tried again every second")
+    s.add_argument("--http", type=int, default=DEFAULT_PORT, metavar="HTTP_PORT",
+                   help=f"web server port (default {DEFAULT_PORT})")
+    s.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1: this machine only; 0.0.0.0: the network)")
+    s.add_argument("--token", default=None,
+                   help="secret the browser must give (?token=...); made up and printed when --host is not "
+                        "loopback and none is given")
+    s.add_argument("--rate", type=float, default=10.0,
+                   help="samples per second asked of each streamable channel at first (default 10)")
+    s.set_defaults(fn=cmd_dashboard)
+
+
+def board_ports() -> List[str]:
+    """Every serial port with a known board USB id."""
+    from serial.tools import list_ports
+
+    from ..ports import KNOWN_USB_VIDS
+
+    return sorted(str(p.device) for p in list_ports.comports() if p.vid in KNOWN_USB_VIDS)
+
+
+def cmd_dashboard(args: argparse.Namespace) -> int:
+    try:
+        import nicegui  # noqa: F401
+    except ImportError:
+        sys.stderr.write("hubwire: the dashboard needs NiceGUI: pip install 'hubwire[dashboard]'\n")
+        return 1
+    ports = list(args.ports) or board_ports()
+    if not ports:
+        sys.stderr.write("hubwire: no board found: name its port (hubwire dashboard /dev/ttyACM0)\n")
+        return 1
+    token = resolve_token(args.host, args.token)
+    try:
+        asyncio.run(_main(args, ports, token))
+    except KeyboardInterrupt:
+        return 130
+    return 0
+
+
+async def _main(args: argparse.Namespace, ports: List[str], token: Any) -> None:
+    from .fleet import DeviceFleet
+
+    host = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
+
+    def started() -> None:
+        url = f"http://{host}:{args.http}/" + (f"?token={token}" if token else "")
+        print(f"hubwire dashboard: {url}  ({', '.join(ports)}; Ctrl-C to stop)", flush=True)
+
+    kwargs = {"timeout": args.timeout, "baudrate": args.baud}
+    if args.no_cache:
+        kwargs["cache_dir"] = False
+    async with DeviceFleet(ports, **kwargs) as fleet:
+        await run_dashboard(fleet, args.host, args.http, token, stream_hz=args.rate, started=started)
