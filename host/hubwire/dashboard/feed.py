@@ -45,12 +45,14 @@ class BoardFeed:
         self.dev = dev
         self.generation = generation
         self.descriptor: Descriptor = dev.descriptor
+        #: Unix time of monotonic 0, fixed so that arrival times keep their order
+        self.epoch = time.time() - time.monotonic()
         self.records: Dict[str, ChannelRecord] = {}
         for ch in self.descriptor.channels:
             if ch.streamable:
                 self.records[ch.name] = ChannelRecord(ch, stream_hz)
             elif ch.readable and not ch.callable and not ch.is_event:
-                self.records[ch.name] = ChannelRecord(ch, min(POLL_HZ, stream_hz))
+                self.records[ch.name] = ChannelRecord(ch, min(POLL_HZ, stream_hz), read="read")
         self.events: Deque[EventRecord] = deque(maxlen=EVENT_LOG)
         self.event_count = 0
         self._streams: Dict[str, "asyncio.Task[None]"] = {}
@@ -74,6 +76,8 @@ class BoardFeed:
         """Ask for ``hz`` samples per second of ``name`` (a new subscription for a streamed channel)."""
         rec = self.records[name]
         rec.rate = float(hz)
+        if rec.read and rec.read != "read":
+            rec.read = f"read {hz:g} times a second (stream refused)"
         if name in self._streams:
             self._streams[name].cancel()
             self._streams[name] = asyncio.ensure_future(self._stream(rec))
@@ -84,10 +88,17 @@ class BoardFeed:
             try:
                 async with self.dev.stream(ch.name, hz=rec.rate, meta=True) as s:
                     async for sample in s:
-                        rec.add(ch.codec.to_json(sample.value), time.time() - (time.monotonic() - sample.time))
+                        rec.add(ch.codec.to_json(sample.value), self.epoch + sample.time)
                 return
             except asyncio.CancelledError:
                 raise
+            except NakError as e:  # e.g. BUSY: the device streams as many channels as it can
+                if not ch.readable:
+                    rec.error = outcome_text(e)
+                    return
+                rec.read = f"read {rec.rate:g} times a second (stream refused: {e.error})"
+                self._streams.pop(ch.name, None)
+                return
             except HubwireError as e:  # not subscribed yet (link down while opening): try again
                 rec.error = str(e)
                 if self.dev.state == "closed":
@@ -96,8 +107,8 @@ class BoardFeed:
 
     async def _poll(self) -> None:
         due: Dict[str, float] = {}
-        polled = [r for r in self.records.values() if not r.channel.streamable]
-        while polled:
+        while True:
+            polled = [r for r in self.records.values() if r.read]
             now = time.monotonic()
             for rec in polled:
                 if self.dev.state != "ready" or due.get(rec.channel.name, 0.0) > now:
@@ -106,17 +117,17 @@ class BoardFeed:
                 try:
                     v = await self.dev.read(rec.channel.name)
                 except HubwireError as e:
-                    rec.error = str(e)
+                    rec.error = outcome_text(e)
                     continue
-                rec.add(rec.channel.codec.to_json(v))
-            await asyncio.sleep(min(0.05, 1.0 / max(r.rate for r in polled)))
+                rec.add(rec.channel.codec.to_json(v), self.epoch + time.monotonic())
+            await asyncio.sleep(min([0.05] + [1.0 / r.rate for r in polled]))
 
     async def _events(self) -> None:
         async for ev in self.dev.events():
             self.event_count += 1
             ch = self.descriptor.by_name(ev.name)
             value = ch.codec.to_json(ev.value) if ch is not None else ev.value
-            self.events.append(EventRecord(self.event_count, time.time(), ev.name, value))
+            self.events.append(EventRecord(self.event_count, self.epoch + ev.time, ev.name, value))
 
     # ------------------------------------------------------------------------- from the page
 
@@ -127,8 +138,8 @@ class BoardFeed:
         except (HubwireError, ValueError, TypeError) as e:
             return False, outcome_text(e)
         rec = self.records.get(ch.name)
-        if rec is not None and not ch.streamable:
-            rec.add(ch.codec.to_json(ch.check(value)))  # the device holds it now
+        if rec is not None and rec.read:
+            rec.add(ch.codec.to_json(ch.check(value)), self.epoch + time.monotonic())  # the device holds it now
         return True, "acked"
 
     async def call(self, ch: Channel, arg: Any) -> Tuple[bool, str]:

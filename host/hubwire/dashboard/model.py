@@ -104,6 +104,8 @@ class ChannelRecord:
     rows: Deque[Tuple[float, ...]] = field(default_factory=deque)
     _arrivals: Deque[float] = field(default_factory=deque)
     error: Optional[str] = None
+    #: how a channel that is not streamed gets its values: "" (streamed), else a note ("read")
+    read: str = ""
 
     def add(self, value_json: Any, at: Optional[float] = None) -> None:
         """Record a value (in its JSON form) that arrived at ``at`` (default now)."""

@@ -106,7 +106,7 @@ def _page(feeds: Feeds) -> None:
     @ui.page("/", title="Hubwire dashboard")
     def index() -> None:
         ui.query("body").classes("bg-gray-100")
-        with ui.header().classes("items-center"):
+        with ui.header(fixed=False).classes("items-center"):
             ui.label("Hubwire").classes("text-2xl font-bold")
             count = ui.label("").props("data-hw-boards")
         column = ui.column().classes("w-full max-w-screen-2xl mx-auto")

@@ -3,6 +3,7 @@ descriptor itself."""
 from __future__ import annotations
 
 import json
+import re
 import time
 from typing import Any, Dict, List, Optional
 
@@ -89,7 +90,7 @@ class BoardView:
                           "reboots", "samples", "events", "dropped events"):
                     ui.label(k).classes("text-gray-600")
                     self.health[k] = ui.label("-").classes("font-mono") \
-                        .props(f'data-hw-health="{self.key}.{k.split()[0]}"')
+                        .props(f'data-hw-health="{self.key}.{re.sub("[^a-z]+", "-", k)}"')
 
     def _set_state(self, board: Any) -> None:
         self.state.set_text(board.state)

@@ -41,9 +41,13 @@ class ValueView:
         ch = rec.channel
         self.label = ui.label("-").classes("font-mono text-lg").props(f'data-hw-value="{_attr(feed.key, ch.name)}"')
         self.unit = _unit(ch)
+        self.note = ui.label("").classes("text-xs text-gray-600")
 
     def refresh(self) -> None:
         rec = self.rec
+        note = rec.read if rec.read not in ("", "read") else ("" if rec.at is not None else rec.error or "")
+        if self.note.text != note:
+            self.note.set_text(note)
         if rec.at is None or rec.at == self._shown:
             return
         self._shown = rec.at
