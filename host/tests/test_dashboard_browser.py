@@ -39,11 +39,11 @@ def _free_port() -> int:
 class Dashboard:
     """`hubwire dashboard` as a user starts it, in its own process."""
 
-    def __init__(self, ports: Tuple[str, ...]) -> None:
+    def __init__(self, ports: Tuple[str, ...], *options: str) -> None:
         self.port = _free_port()
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen([sys.executable, "-m", "hubwire", "dashboard", *ports, "--http", str(self.port),
-                                      "--no-cache"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+                                      "--no-cache", *options], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
         sel = selectors.DefaultSelector()
         assert self.proc.stdout is not None
         sel.register(self.proc.stdout, selectors.EVENT_READ)
@@ -83,16 +83,23 @@ def boards(tmp_path_factory: Any) -> Iterator[Tuple[Emulator, Emulator]]:
 
 
 @pytest.fixture(scope="module")
-def page(boards: Tuple[Emulator, Emulator]) -> Iterator[Any]:
+def browser() -> Iterator[Any]:
+    """Debian's chromium, headless (Playwright downloads no browser of its own)."""
+    with playwright_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def page(boards: Tuple[Emulator, Emulator], browser: Any) -> Iterator[Any]:
     rover, actions = boards
     dash = Dashboard((rover.link, actions.link))
-    with playwright_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        pg = browser.new_page(viewport={"width": 1400, "height": 1000})
-        pg.set_default_timeout(WAIT_MS)
-        pg.goto(dash.url)
-        yield pg
-        browser.close()
+    pg = browser.new_page(viewport={"width": 1400, "height": 1000})
+    pg.set_default_timeout(WAIT_MS)
+    pg.goto(dash.url)
+    yield pg
+    pg.close()
     dash.stop()
 
 
@@ -231,3 +238,26 @@ def _screenshot(page: Any) -> None:
               else os.path.join(os.environ.get("TMPDIR", "/tmp"), "hubwire-dashboard.png"))
     page.locator(sel("board", "rover")).screenshot(path=target)
     assert os.path.getsize(target) > 10_000
+
+
+def test_with_a_token_the_page_needs_it(tmp_path: Any, browser: Any) -> None:
+    board = Emulator(os.path.join(os.path.dirname(emulator_binary()), "hubwire-actions-emulator"),
+                     str(tmp_path / "actions"))
+    board.start()
+    dash = Dashboard((board.link,), "--token", "s3cret")
+    try:
+        assert dash.url.endswith("/?token=s3cret")
+        bare = dash.url.split("?")[0]
+        ctx = browser.new_context()  # cookies of its own
+        pg = ctx.new_page()
+        pg.set_default_timeout(WAIT_MS)
+        assert pg.goto(bare).status == 401
+        assert pg.goto(bare + "?token=s3cre").status == 401
+        assert pg.goto(dash.url).status == 200
+        wait_text(pg, sel("state", "actions"), "^ready$")
+        assert pg.goto(bare).status == 200  # the token is remembered for this site
+        wait_text(pg, sel("state", "actions"), "^ready$")
+        ctx.close()
+    finally:
+        dash.stop()
+        board.stop()

@@ -26,6 +26,8 @@ log = logging.getLogger("hubwire.dashboard")
 EVENT_LOG = 500
 #: default read rate of readable channels that cannot stream, Hz
 POLL_HZ = 2.0
+#: most reads a second of one channel (each is a round trip; streams are for fast values)
+READ_MAX_HZ = 10.0
 
 
 def outcome_text(exc: BaseException) -> str:
@@ -75,9 +77,9 @@ class BoardFeed:
     def set_rate(self, name: str, hz: float) -> None:
         """Ask for ``hz`` samples per second of ``name`` (a new subscription for a streamed channel)."""
         rec = self.records[name]
-        rec.rate = float(hz)
+        rec.rate = float(hz) if not rec.read else min(float(hz), READ_MAX_HZ)
         if rec.read and rec.read != "read":
-            rec.read = f"read {hz:g} times a second (stream refused)"
+            rec.read = f"read {rec.rate:g} times a second (stream refused)"
         if name in self._streams:
             self._streams[name].cancel()
             self._streams[name] = asyncio.ensure_future(self._stream(rec))
@@ -96,6 +98,7 @@ class BoardFeed:
                 if not ch.readable:
                     rec.error = outcome_text(e)
                     return
+                rec.rate = min(rec.rate, READ_MAX_HZ)
                 rec.read = f"read {rec.rate:g} times a second (stream refused: {e.error})"
                 self._streams.pop(ch.name, None)
                 return

@@ -13,7 +13,7 @@ from nicegui import ui
 
 from ..descriptor import Channel
 from ..errors import HubwireError
-from .feed import BoardFeed, outcome_text
+from .feed import READ_MAX_HZ, BoardFeed, outcome_text
 from .model import RATES, ChannelRecord, decimate, fmt_value, is_integer, plottable, to_csv, widget_for
 
 __all__ = ["ValueView", "PlotView", "InputView", "ActionView", "WINDOWS"]
@@ -67,7 +67,8 @@ class PlotView:
         self._cols: List[str] = []
         self._data: Dict[str, Any] = {"times": [], "rows": [], "cols": []}
         with ui.row().classes("items-center gap-2 w-full"):
-            ui.select({r: f"{r} Hz" for r in RATES}, value=self._nearest(rec.rate), label="rate",
+            rates = [r for r in RATES if ch.streamable or r <= READ_MAX_HZ]  # reads are round trips
+            ui.select({r: f"{r} Hz" for r in rates}, value=self._nearest(rec.rate), label="rate",
                       on_change=lambda e: feed.set_rate(ch.name, float(e.value))).classes("w-24") \
                 .props(f'dense data-hw-rate="{_attr(feed.key, ch.name)}"')
             self.achieved = ui.label("").classes("text-xs text-gray-600") \
