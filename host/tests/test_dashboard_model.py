@@ -122,3 +122,13 @@ def test_the_token_gate_lets_in_only_who_gives_the_token() -> None:
     assert reached
     sent, reached = _call(gate, "websocket", cookie=f"{TOKEN_COOKIE}=s3cre")
     assert not reached
+
+
+def test_rates_from_the_command_line() -> None:
+    from hubwire.dashboard.cli import parse_rates
+
+    assert parse_rates([]) == (10.0, {})
+    assert parse_rates(["1", "imu=100", "rover.left=50"]) == (1.0, {"imu": 100.0, "rover.left": 50.0})
+    for bad in (["0"], ["imu=fast"], ["imu=2000"]):
+        with pytest.raises(ValueError):
+            parse_rates(bad)

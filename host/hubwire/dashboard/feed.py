@@ -10,7 +10,7 @@ import contextlib
 import logging
 import time
 from collections import deque
-from typing import Any, Deque, Dict, List, Optional, Tuple
+from typing import Any, Deque, Dict, List, Mapping, Optional, Tuple
 
 from .. import aio
 from ..descriptor import Channel, Descriptor
@@ -42,7 +42,8 @@ def outcome_text(exc: BaseException) -> str:
 class BoardFeed:
     """Live records of one board's device (one session object, one descriptor)."""
 
-    def __init__(self, key: str, dev: aio.AsyncDevice, generation: int, stream_hz: float) -> None:
+    def __init__(self, key: str, dev: aio.AsyncDevice, generation: int, stream_hz: float,
+                 rates: Optional[Mapping[str, float]] = None) -> None:
         self.key = key
         self.dev = dev
         self.generation = generation
@@ -50,11 +51,13 @@ class BoardFeed:
         #: Unix time of monotonic 0, fixed so that arrival times keep their order
         self.epoch = time.time() - time.monotonic()
         self.records: Dict[str, ChannelRecord] = {}
+        rates = rates or {}
         for ch in self.descriptor.channels:
+            hz = rates.get(f"{key}.{ch.name}", rates.get(ch.name))
             if ch.streamable:
-                self.records[ch.name] = ChannelRecord(ch, stream_hz)
+                self.records[ch.name] = ChannelRecord(ch, hz or stream_hz)
             elif ch.readable and not ch.callable and not ch.is_event:
-                self.records[ch.name] = ChannelRecord(ch, min(POLL_HZ, stream_hz), read="read")
+                self.records[ch.name] = ChannelRecord(ch, min(hz or min(POLL_HZ, stream_hz), READ_MAX_HZ), read="read")
         self.events: Deque[EventRecord] = deque(maxlen=EVENT_LOG)
         self.event_count = 0
         self._streams: Dict[str, "asyncio.Task[None]"] = {}
@@ -160,9 +163,10 @@ class BoardFeed:
 class Feeds:
     """A feed for every ready board of ``fleet``, kept current as boards come, go and change."""
 
-    def __init__(self, fleet: FleetLike, stream_hz: float = 10.0) -> None:
+    def __init__(self, fleet: FleetLike, stream_hz: float = 10.0, rates: Optional[Mapping[str, float]] = None) -> None:
         self.fleet = fleet
         self.stream_hz = stream_hz
+        self.rates = dict(rates or {})
         self.feeds: Dict[str, BoardFeed] = {}
         self._generation = 0
         self._task: Optional["asyncio.Task[None]"] = None
@@ -198,7 +202,7 @@ class Feeds:
         if old is not None:
             asyncio.ensure_future(old.stop())
         self._generation += 1
-        feed = BoardFeed(board.key, dev, self._generation, self.stream_hz)
+        feed = BoardFeed(board.key, dev, self._generation, self.stream_hz, self.rates)
         self.feeds[board.key] = feed
         feed.start()
 

@@ -11,7 +11,7 @@ import logging
 import secrets
 import socket
 from http.cookies import SimpleCookie
-from typing import Any, Awaitable, Callable, Dict, Iterator, MutableMapping, Optional
+from typing import Any, Awaitable, Callable, Dict, Iterator, Mapping, MutableMapping, Optional
 from urllib.parse import parse_qs
 
 from .feed import Feeds
@@ -174,12 +174,14 @@ class _Server:
 
 async def run_dashboard(fleet: FleetLike, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
                         token: Optional[str] = None, *, stream_hz: float = 10.0,
+                        rates: Optional[Mapping[str, float]] = None,
                         started: Optional[Callable[[], None]] = None) -> None:
     """Serve the dashboard of ``fleet``'s boards at ``http://host:port/`` until cancelled.
 
     ``token``: required from browsers (``http://host:port/?token=TOKEN``) when given; listening on a
     non-loopback ``host`` without one raises ValueError (:func:`resolve_token` makes one).
-    ``stream_hz``: the rate streamable channels are subscribed at first (selectable on the page).
+    ``stream_hz``: the rate streamable channels are subscribed at first (selectable on the page);
+    ``rates``: other first rates by channel name (every board) or ``"key.name"`` (one board).
     ``started`` is called once the server listens.
     """
     if not token and not is_loopback(host):
@@ -187,7 +189,7 @@ async def run_dashboard(fleet: FleetLike, host: str = "127.0.0.1", port: int = D
     from fastapi import FastAPI
     from nicegui import ui
 
-    feeds = Feeds(fleet, stream_hz)
+    feeds = Feeds(fleet, stream_hz, rates)
     await feeds.start()
     _page(feeds)
     app = FastAPI()
