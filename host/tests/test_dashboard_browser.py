@@ -148,6 +148,18 @@ def test_a_streamed_value_updates(page: Any) -> None:
     wait_text(page, sel("achieved", "rover.imu"), r"^[1-9][0-9.]* Hz achieved")
 
 
+def test_a_struct_is_plotted_one_line_per_number(page: Any) -> None:
+    lines = """s => { const box = document.querySelector(s + ' [_echarts_instance_]');
+        const chart = box && getElement(box.id.slice(1)).chart;
+        const series = chart ? chart.getOption().series || [] : [];
+        return series.map(x => x.name + ':' + (x.data.length > 1)).join(',') }"""
+    page.wait_for_function(f"s => ({lines})(s).includes(':true')", arg=sel("channel", "rover.imu"), timeout=WAIT_MS)
+    drawn = page.evaluate(lines, sel("channel", "rover.imu")).split(",")
+    assert [x.split(":")[0] for x in drawn] == ["imu.ax", "imu.ay", "imu.az", "imu.gyro[0]", "imu.gyro[1]",
+                                                "imu.gyro[2]"], drawn
+    assert all(x.endswith(":true") for x in drawn), drawn
+
+
 def test_a_paused_plot_exports_what_it_shows_as_csv(page: Any) -> None:
     wait_newer(page, "rover.range", wait_newer(page, "rover.range", 0.0))  # two samples at least
     page.locator(sel("pause", "rover.range")).click()

@@ -45,18 +45,20 @@ def test_a_struct_is_plotted_as_one_column_per_number() -> None:
     rec.add({"x": 1.5, "g": [3, -4]}, at=100.0)
     rec.add({"x": 2.0, "g": [5, 6]}, at=100.5)
     assert rec.columns == ["pose.x", "pose.g[0]", "pose.g[1]"]
-    assert list(rec.rows) == [(1.5, 3.0, -4.0), (2.0, 5.0, 6.0)]
-    assert model.to_csv(rec.columns, list(rec.times), list(rec.rows)).splitlines() == [
+    times, rows = rec.window(10.0, now=101.0)
+    assert rows == [(1.5, 3.0, -4.0), (2.0, 5.0, 6.0)]
+    assert model.to_csv(rec.columns, times, rows).splitlines() == [
         "time,pose.x,pose.g[0],pose.g[1]", "100.000000,1.5,3,-4", "100.500000,2,5,6"]
 
 
 def test_history_keeps_the_last_minutes_and_a_window_picks_from_it() -> None:
     rec = model.ChannelRecord(channels()["speed"], 10.0)
-    for i in range(700):
+    for i in range(3000):
         rec.add(i / 1000.0, at=float(i))
-    assert rec.times[0] == 700 - 1 - model.HISTORY_S
-    times, rows = rec.window(10.0, now=699.0)
-    assert times == [float(t) for t in range(689, 700)] and rows[-1] == (0.699,)
+    times, rows = rec.window(10.0, now=2999.0)
+    assert times == [float(t) for t in range(2989, 3000)] and rows[-1] == (2.999,)
+    times, rows = rec.window(1e6, now=2999.0)
+    assert times[0] == 2999 - model.HISTORY_S and len(rows) == model.HISTORY_S + 1
 
 
 def test_the_achieved_rate_counts_arrivals_in_its_window() -> None:

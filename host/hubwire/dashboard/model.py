@@ -100,12 +100,15 @@ class ChannelRecord:
     at: Optional[float] = None
     count: int = 0
     columns: List[str] = field(default_factory=list)
-    times: Deque[float] = field(default_factory=deque)
-    rows: Deque[Tuple[float, ...]] = field(default_factory=deque)
-    _arrivals: Deque[float] = field(default_factory=deque)
     error: Optional[str] = None
     #: how a channel that is not streamed gets its values: "" (streamed), else a note ("read")
     read: str = ""
+    # history in time order from index _start on (lists trimmed now and then: cheap to slice)
+    _times: List[float] = field(default_factory=list)
+    _rows: List[Tuple[float, ...]] = field(default_factory=list)
+    _start: int = 0
+    _names: List[str] = field(default_factory=list)
+    _arrivals: Deque[float] = field(default_factory=deque)
 
     def add(self, value_json: Any, at: Optional[float] = None) -> None:
         """Record a value (in its JSON form) that arrived at ``at`` (default now)."""
@@ -113,34 +116,35 @@ class ChannelRecord:
         self.value, self.at, self.error = value_json, now, None
         self.count += 1
         self._arrivals.append(now)
-        while self._arrivals and self._arrivals[0] < now - RATE_WINDOW_S:
+        while self._arrivals[0] < now - RATE_WINDOW_S:
             self._arrivals.popleft()
         pairs = flatten(value_json)
         if not pairs:
             return
-        n = self.channel.name
-        cols = [n + c if not c or c.startswith("[") else f"{n}.{c}" for c, _ in pairs]
-        if cols != self.columns:  # first sample, or the device came back with another layout
-            self.columns, self.times, self.rows = cols, deque(), deque()
-        self.times.append(now)
-        self.rows.append(tuple(v for _, v in pairs))
-        while self.times and self.times[0] < now - HISTORY_S:
-            self.times.popleft()
-            self.rows.popleft()
+        names = [c for c, _ in pairs]
+        if names != self._names:  # first sample, or the device came back with another layout
+            n = self.channel.name
+            self._names = names
+            self.columns = [n + c if not c or c.startswith("[") else f"{n}.{c}" for c in names]
+            self._times, self._rows, self._start = [], [], 0
+        self._times.append(now)
+        self._rows.append(tuple(v for _, v in pairs))
+        self._start = bisect.bisect_left(self._times, now - HISTORY_S, lo=self._start)
+        if self._start > 1024 and self._start * 2 > len(self._times):
+            del self._times[:self._start], self._rows[:self._start]
+            self._start = 0
 
     def achieved(self, now: Optional[float] = None) -> float:
         """Samples per second that arrived over the last :data:`RATE_WINDOW_S` seconds."""
         now = time.time() if now is None else now
-        n = sum(1 for t in self._arrivals if t >= now - RATE_WINDOW_S)
+        n = len(self._arrivals) - bisect.bisect_left(self._arrivals, now - RATE_WINDOW_S)
         return n / RATE_WINDOW_S
 
     def window(self, seconds: float, now: Optional[float] = None) -> Tuple[List[float], List[Tuple[float, ...]]]:
-        """Times and rows of the last ``seconds`` seconds."""
+        """Times and rows of the last ``seconds`` seconds (of the :data:`HISTORY_S` kept)."""
         now = time.time() if now is None else now
-        start = now - seconds
-        times = list(self.times)
-        lo = bisect.bisect_left(times, start)  # history is in time order
-        return times[lo:], list(self.rows)[lo:]
+        lo = bisect.bisect_left(self._times, now - min(seconds, HISTORY_S), lo=self._start)
+        return self._times[lo:], self._rows[lo:]
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,8 @@ __all__ = ["BoardView", "hub_channels"]
 
 #: events shown per board (the feed keeps more)
 EVENTS_SHOWN = 100
+#: link health is redrawn every this many value refreshes
+HEALTH_EVERY = 5
 _STATE_COLOURS = {"ready": "green", "connecting": "orange", "lost": "red", "unplugged": "grey"}
 
 
@@ -43,6 +45,7 @@ class BoardView:
         self.plots: List[PlotView] = []
         self._events_shown = 0
         self._health_text: Dict[str, str] = {}
+        self._ticks = 0
         self.card = ui.card().classes("w-full").props(f'data-hw-board="{board.key}"')
         with self.card:
             with ui.row().classes("items-center gap-4"):
@@ -107,7 +110,9 @@ class BoardView:
         for v in self.values:
             v.refresh()
         self._refresh_events(feed)
-        self._refresh_health(feed)
+        self._ticks += 1
+        if self._ticks % HEALTH_EVERY == 1:
+            self._refresh_health(feed)
 
     def refresh_plots(self) -> None:
         for p in self.plots:
