@@ -148,13 +148,20 @@ def test_a_streamed_value_updates(page: Any) -> None:
     wait_text(page, sel("achieved", "rover.imu"), r"^[1-9][0-9.]* Hz achieved")
 
 
+LINES_JS = """s => { const box = document.querySelector(s + ' [_echarts_instance_]');
+    const chart = box && getElement(box.id.slice(1)).chart;
+    const series = chart ? chart.getOption().series || [] : [];
+    return series.map(x => x.name + ':' + (x.data.length > 1)).join(',') }"""
+
+
+def wait_drawn(page: Any, key: str) -> None:
+    page.wait_for_function(f"s => ({LINES_JS})(s).includes(':true')", arg=sel("channel", key), timeout=WAIT_MS)
+
+
 def test_a_struct_is_plotted_one_line_per_number(page: Any) -> None:
-    lines = """s => { const box = document.querySelector(s + ' [_echarts_instance_]');
-        const chart = box && getElement(box.id.slice(1)).chart;
-        const series = chart ? chart.getOption().series || [] : [];
-        return series.map(x => x.name + ':' + (x.data.length > 1)).join(',') }"""
-    page.wait_for_function(f"s => ({lines})(s).includes(':true')", arg=sel("channel", "rover.imu"), timeout=WAIT_MS)
-    drawn = page.evaluate(lines, sel("channel", "rover.imu")).split(",")
+    page.locator(sel("channel", "rover.imu")).scroll_into_view_if_needed()  # plots off screen wait
+    wait_drawn(page, "rover.imu")
+    drawn = page.evaluate(LINES_JS, sel("channel", "rover.imu")).split(",")
     assert [x.split(":")[0] for x in drawn] == ["imu.ax", "imu.ay", "imu.az", "imu.gyro[0]", "imu.gyro[1]",
                                                 "imu.gyro[2]"], drawn
     assert all(x.endswith(":true") for x in drawn), drawn
@@ -162,6 +169,8 @@ def test_a_struct_is_plotted_one_line_per_number(page: Any) -> None:
 
 def test_a_paused_plot_exports_what_it_shows_as_csv(page: Any) -> None:
     wait_newer(page, "rover.range", wait_newer(page, "rover.range", 0.0))  # two samples at least
+    page.locator(sel("channel", "rover.range")).scroll_into_view_if_needed()
+    wait_drawn(page, "rover.range")
     page.locator(sel("pause", "rover.range")).click()
     with page.expect_download(timeout=WAIT_MS) as dl:
         page.locator(sel("csv", "rover.range")).click()
@@ -248,7 +257,13 @@ def _screenshot(page: Any) -> None:
     root = repo_root()
     target = (os.path.join(root, "docs", "dashboard.png") if root and os.environ.get("HUBWIRE_UPDATE_SCREENSHOT")
               else os.path.join(os.environ.get("TMPDIR", "/tmp"), "hubwire-dashboard.png"))
-    page.locator(sel("board", "rover")).screenshot(path=target)
+    board = page.locator(sel("board", "rover"))
+    board.scroll_into_view_if_needed()
+    page.set_viewport_size({"width": 1400, "height": int(board.bounding_box()["height"]) + 200})  # every plot on screen
+    for ch in ("left", "imu", "range", "battery", "applied"):
+        wait_drawn(page, f"rover.{ch}")
+    board.screenshot(path=target)
+    page.set_viewport_size({"width": 1400, "height": 1000})
     assert os.path.getsize(target) > 10_000
 
 

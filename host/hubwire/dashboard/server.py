@@ -11,7 +11,7 @@ import logging
 import secrets
 import socket
 from http.cookies import SimpleCookie
-from typing import Any, Awaitable, Callable, Dict, Iterator, Mapping, MutableMapping, Optional
+from typing import Any, Awaitable, Callable, Dict, Iterator, Mapping, MutableMapping, Optional, Set
 from urllib.parse import parse_qs
 
 from .feed import Feeds
@@ -98,6 +98,24 @@ class TokenGate:
         return wrapped
 
 
+# Plots off screen are not redrawn: the page tells which plots are on screen (or nearly).
+_VISIBILITY_JS = """<script>
+document.addEventListener('DOMContentLoaded', () => {
+  const send = d => {  // once the page is connected to the server
+    if (window.did_handshake && getElement(0)) emitEvent('hw_plot_visible', d); else setTimeout(() => send(d), 50);
+  };
+  const seen = new IntersectionObserver(entries => {
+    for (const e of entries) send({plot: e.target.dataset.hwPlot, on: e.isIntersecting});
+  }, {rootMargin: '300px'});
+  const watched = new WeakSet();
+  const scan = () => document.querySelectorAll('[data-hw-plot]').forEach(el => {
+    if (!watched.has(el)) { watched.add(el); seen.observe(el); } });
+  new MutationObserver(scan).observe(document.body, {childList: true, subtree: true});
+  scan();
+});
+</script>"""
+
+
 def _page(feeds: Feeds) -> None:
     from nicegui import ui
 
@@ -106,6 +124,13 @@ def _page(feeds: Feeds) -> None:
     @ui.page("/", title="Hubwire dashboard")
     def index() -> None:
         ui.query("body").classes("bg-gray-100")
+        ui.add_head_html(_VISIBILITY_JS)
+        visible: Set[str] = set()
+
+        def on_visible(e: Any) -> None:
+            (visible.add if e.args.get("on") else visible.discard)(str(e.args.get("plot")))
+
+        ui.on("hw_plot_visible", on_visible)
         with ui.header(fixed=False).classes("items-center"):
             ui.label("Hubwire").classes("text-2xl font-bold")
             count = ui.label("").props("data-hw-boards")
@@ -135,7 +160,7 @@ def _page(feeds: Feeds) -> None:
 
         def plots() -> None:
             for v in views.values():
-                v.refresh_plots()
+                v.refresh_plots(visible)
 
         sync()
         ui.timer(VALUE_REFRESH, sync)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import re
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Container, Dict, List, Optional
 
 from nicegui import ui
 
@@ -114,9 +114,10 @@ class BoardView:
         if self._ticks % HEALTH_EVERY == 1:
             self._refresh_health(feed)
 
-    def refresh_plots(self) -> None:
+    def refresh_plots(self, visible: Container[str]) -> None:
+        """Redraw the plots on screen (``visible``: their ``data-hw-plot`` keys)."""
         for p in self.plots:
-            p.refresh()
+            p.refresh(p.plot_key in visible)
 
     def _refresh_events(self, feed: BoardFeed) -> None:
         new = [e for e in feed.events if e.n > self._events_shown]

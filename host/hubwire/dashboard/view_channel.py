@@ -86,7 +86,8 @@ class PlotView:
             "xAxis": {"type": "time"},
             "yAxis": {"type": "value", "scale": True, "name": ch.unit or ""},
             "series": [],
-        }).classes("w-full h-48")
+        }).classes("w-full h-48").props(f'data-hw-plot="{_attr(feed.key, ch.name)}"')
+        self.plot_key = _attr(feed.key, ch.name)
 
     @staticmethod
     def _nearest(rate: float) -> int:
@@ -100,9 +101,12 @@ class PlotView:
         self.paused = on
         self._drawn_at = None
 
-    def refresh(self) -> None:
+    def refresh(self, on_screen: bool = True) -> None:
         rec = self.rec
         self.achieved.set_text(f"{rec.achieved():.1f} Hz achieved")
+        if not on_screen:
+            self._drawn_at = None  # drawn afresh once scrolled to
+            return
         if self.paused or rec.at is None or rec.at == self._drawn_at:
             return
         self._drawn_at = rec.at
