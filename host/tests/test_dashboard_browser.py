@@ -114,17 +114,21 @@ def field(page: Any, kind: str, key: str) -> Any:
 
 
 def wait_text(page: Any, selector: str, pattern: str) -> str:
-    """Wait until the element's text matches ``pattern``; its text."""
+    """Scroll to the element (channels off screen are not redrawn), wait until its text matches
+    ``pattern``; its text."""
+    page.locator(selector).scroll_into_view_if_needed()
     playwright_api.expect(page.locator(selector)).to_have_text(re.compile(pattern), timeout=WAIT_MS)
     return str(page.locator(selector).inner_text())
 
 
 def stamp(page: Any, key: str) -> float:
+    page.locator(sel("value", key)).scroll_into_view_if_needed()
     v = page.locator(sel("value", key)).get_attribute("data-hw-at")
     return float(v) if v else 0.0
 
 
 def wait_newer(page: Any, key: str, than: float) -> float:
+    page.locator(sel("value", key)).scroll_into_view_if_needed()
     page.wait_for_function(
         "([s, t]) => { const e = document.querySelector(s); return e && parseFloat(e.dataset.hwAt || 0) > t }",
         arg=[sel("value", key), than], timeout=WAIT_MS)
@@ -196,6 +200,7 @@ def test_slider_write_reaches_the_board_and_is_acked(page: Any) -> None:
     assert 0.3 <= written <= 0.7, status
     # the board's own stream of left shows the value, and its count of applied writes went up
     wait_text(page, sel("value", "rover.left"), rf"^{re.escape(f'{written:.6g}')} m/s$")
+    page.locator(sel("value", "rover.applied")).scroll_into_view_if_needed()
     page.wait_for_function("([s, n]) => parseInt(document.querySelector(s).innerText) > n",
                            arg=[sel("value", "rover.applied"), applied], timeout=WAIT_MS)
 

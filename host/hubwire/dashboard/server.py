@@ -98,17 +98,17 @@ class TokenGate:
         return wrapped
 
 
-# Plots off screen are not redrawn: the page tells which plots are on screen (or nearly).
+# Channels off screen are not redrawn: the page tells which channel cards are on screen (or nearly).
 _VISIBILITY_JS = """<script>
 document.addEventListener('DOMContentLoaded', () => {
   const send = d => {  // once the page is connected to the server
-    if (window.did_handshake && getElement(0)) emitEvent('hw_plot_visible', d); else setTimeout(() => send(d), 50);
+    if (window.did_handshake && getElement(0)) emitEvent('hw_visible', d); else setTimeout(() => send(d), 50);
   };
   const seen = new IntersectionObserver(entries => {
-    for (const e of entries) send({plot: e.target.dataset.hwPlot, on: e.isIntersecting});
+    for (const e of entries) send({key: e.target.dataset.hwChannel, on: e.isIntersecting});
   }, {rootMargin: '300px'});
   const watched = new WeakSet();
-  const scan = () => document.querySelectorAll('[data-hw-plot]').forEach(el => {
+  const scan = () => document.querySelectorAll('[data-hw-channel]').forEach(el => {
     if (!watched.has(el)) { watched.add(el); seen.observe(el); } });
   new MutationObserver(scan).observe(document.body, {childList: true, subtree: true});
   scan();
@@ -128,9 +128,9 @@ def _page(feeds: Feeds) -> None:
         visible: Set[str] = set()
 
         def on_visible(e: Any) -> None:
-            (visible.add if e.args.get("on") else visible.discard)(str(e.args.get("plot")))
+            (visible.add if e.args.get("on") else visible.discard)(str(e.args.get("key")))
 
-        ui.on("hw_plot_visible", on_visible)
+        ui.on("hw_visible", on_visible)
         with ui.header(fixed=False).classes("items-center"):
             ui.label("Hubwire").classes("text-2xl font-bold")
             count = ui.label("").props("data-hw-boards")
@@ -153,7 +153,7 @@ def _page(feeds: Feeds) -> None:
                     with column:
                         views[b.key] = BoardView(b, feed)
                     views[b.key].card.move(column, target_index=keys.index(b.key) + 1)
-                views[b.key].refresh(b)
+                views[b.key].refresh(b, visible)
             empty.set_visibility(not boards)
             count.set_text(f"{len(boards)} board{'s' if len(boards) != 1 else ''}: "
                            + ", ".join(f"{b.key} {b.state}" for b in boards))

@@ -101,23 +101,24 @@ class BoardView:
         self.where.set_text(" ".join(x for x in (board.port or "unplugged",
                                                    f"id {board.board_id}" if board.board_id else "") if x))
 
-    def refresh(self, board: Any) -> None:
+    def refresh(self, board: Any, visible: Container[str]) -> None:
+        """Update state, events, health, and the channels on screen (``visible``: "key.channel")."""
         if self.state.text != board.state or not self.where.text:
             self._set_state(board)
         feed = self.feed
         if feed is None:
             return
         for v in self.values:
-            v.refresh()
+            v.refresh(v.key in visible)
         self._refresh_events(feed)
         self._ticks += 1
         if self._ticks % HEALTH_EVERY == 1:
             self._refresh_health(feed)
 
     def refresh_plots(self, visible: Container[str]) -> None:
-        """Redraw the plots on screen (``visible``: their ``data-hw-plot`` keys)."""
+        """Redraw the plots on screen."""
         for p in self.plots:
-            p.refresh(p.plot_key in visible)
+            p.refresh(p.key in visible)
 
     def _refresh_events(self, feed: BoardFeed) -> None:
         new = [e for e in feed.events if e.n > self._events_shown]

@@ -39,12 +39,16 @@ class ValueView:
         self.rec = rec
         self._shown: Optional[float] = None
         ch = rec.channel
+        self.key = _attr(feed.key, ch.name)
         self.label = ui.label("-").classes("font-mono text-lg").props(f'data-hw-value="{_attr(feed.key, ch.name)}"')
         self.unit = _unit(ch)
         self.note = ui.label("").classes("text-xs text-gray-600")
 
-    def refresh(self) -> None:
+    def refresh(self, on_screen: bool = True) -> None:
         rec = self.rec
+        if not on_screen:
+            self._shown = None  # shown afresh once scrolled to
+            return
         note = rec.read if rec.read not in ("", "read") else ("" if rec.at is not None else rec.error or "")
         if self.note.text != note:
             self.note.set_text(note)
@@ -86,8 +90,8 @@ class PlotView:
             "xAxis": {"type": "time"},
             "yAxis": {"type": "value", "scale": True, "name": ch.unit or ""},
             "series": [],
-        }).classes("w-full h-48").props(f'data-hw-plot="{_attr(feed.key, ch.name)}"')
-        self.plot_key = _attr(feed.key, ch.name)
+        }).classes("w-full h-48")
+        self.key = _attr(feed.key, ch.name)
 
     @staticmethod
     def _nearest(rate: float) -> int:
@@ -103,10 +107,10 @@ class PlotView:
 
     def refresh(self, on_screen: bool = True) -> None:
         rec = self.rec
-        self.achieved.set_text(f"{rec.achieved():.1f} Hz achieved")
         if not on_screen:
             self._drawn_at = None  # drawn afresh once scrolled to
             return
+        self.achieved.set_text(f"{rec.achieved():.1f} Hz achieved")
         if self.paused or rec.at is None or rec.at == self._drawn_at:
             return
         self._drawn_at = rec.at
@@ -131,6 +135,7 @@ class InputView:
 
     def __init__(self, feed: BoardFeed, ch: Channel) -> None:
         self.feed, self.ch = feed, ch
+        self.key = _attr(feed.key, ch.name)
         self.kind = widget_for(ch)
         self.acked: Any = None
         self._quiet = False
@@ -160,7 +165,7 @@ class InputView:
         self.acked = start
         self._started = start is not None
 
-    def refresh(self) -> None:
+    def refresh(self, on_screen: bool = True) -> None:
         """Start from the device's value once it is known."""
         if self._started:
             return
@@ -218,7 +223,7 @@ class ActionView:
 
     def __init__(self, feed: BoardFeed, ch: Channel) -> None:
         self.feed, self.ch = feed, ch
-        a = _attr(feed.key, ch.name)
+        a = self.key = _attr(feed.key, ch.name)
         with ui.row().classes("items-center gap-2"):
             self.arg = None
             if ch.codec.kind != "void":
@@ -228,7 +233,7 @@ class ActionView:
             self.result = ui.label("").classes("font-mono").props(f'data-hw-result="{a}"')
         self.calls = 0
 
-    def refresh(self) -> None:
+    def refresh(self, on_screen: bool = True) -> None:
         pass  # a result shows when its call returns
 
     async def _call(self) -> None:
