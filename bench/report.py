@@ -15,7 +15,7 @@ import sys
 
 from common import RESULTS, ROOT, md_table, row
 
-ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many"]
+ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many", "dashboard"]
 SCALE = {
     "footprint": "SerialTransfer +2.9 KB/+677 B, rosserial +8.2 KB/+854 B, StandardFirmata +11.7 KB/+883 B",
     "rx_cycles": "CRC-16 bitwise 108 c/B, PROGMEM table 24 c/B, _crc_xmodem_update 34 c/B; COBS decode 13 c/B",
@@ -24,6 +24,7 @@ SCALE = {
     "connect": "pyFirmata sleeps 5 s, pymata 4 s, rosserial 2.1 s",
     "rtt": "micro-ROS 8.8 ms at 115200",
     "many": "",
+    "dashboard": "",
 }
 
 
