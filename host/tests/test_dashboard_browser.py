@@ -21,7 +21,9 @@ from hubwire.dashboard.server import PLOT_REFRESH, VALUE_REFRESH
 from hubwire.session.link import LOSS_HEARTBEATS
 from hubwire.testing import emulator_binary, repo_root
 
-playwright_api = pytest.importorskip("playwright.sync_api", reason="pip install 'hubwire[test]'")
+if sys.version_info < (3, 10):
+    pytest.skip("NiceGUI 3 and Playwright need Python 3.10+", allow_module_level=True)
+import playwright.sync_api as playwright_api  # noqa: E402  (after the version check)
 
 CHROMIUM = "/usr/bin/chromium"
 HEARTBEAT_S = 0.25  # the hub's and the emulated Rover's heartbeat interval

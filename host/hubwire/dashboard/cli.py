@@ -64,7 +64,7 @@ def cmd_dashboard(args: argparse.Namespace) -> int:
     try:
         import nicegui  # noqa: F401
     except ImportError:
-        sys.stderr.write("hubwire: the dashboard needs NiceGUI: pip install 'hubwire[dashboard]'\n")
+        sys.stderr.write("hubwire: the dashboard needs NiceGUI (Python 3.10+): pip install 'hubwire[dashboard]'\n")
         return 1
     ports = list(args.ports) or board_ports()
     if not ports:
