@@ -161,8 +161,9 @@ chromium driven by Playwright, {a.window:g} s window per load. CPU = utime + sti
 window / wall time (one core = 100 %). Latency: from a sample's arrival at the hub to the animation
 frame after the page's DOM shows it (`data-hw-at` read by a MutationObserver), every value change on
 the page. The page is refreshed every 100 ms (values) and 500 ms (plots), so about half of 100 ms is
-the wait for the next refresh. Plots are redrawn while on screen (a 1400 x 1000 window here, the
-top of the first board); every value on the page is updated. Load average at the end {load[0]:.1f} on {os.cpu_count()} cores (shared machine).
+the wait for the next refresh. Only channels on screen are redrawn, values and plots (a 1400 x 1000
+window here: the top of the first board), so the values timed are those; health, states and events
+of every board are updated. Load average at the end {load[0]:.1f} on {os.cpu_count()} cores (shared machine).
 
 {md_table(["load", "samples/s (hub's count)", "dashboard CPU", "chromium CPU", "emulators CPU",
            "plots on screen", "values timed", "p50 ms", "p90 ms", "p99 ms", "max ms", "states",

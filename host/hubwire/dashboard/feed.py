@@ -192,9 +192,13 @@ class Feeds:
         return sorted(self.fleet.boards(), key=lambda b: b.key)
 
     def update(self, board: Any) -> None:
-        """A feed for ``board`` if it has a discovered device it has none for yet."""
+        """A feed for ``board`` if it has a discovered device it has none for yet; none while it has
+        no device."""
         dev: Optional[aio.AsyncDevice] = board.device
         old = self.feeds.get(board.key)
+        if dev is None and old is not None:  # unplugged: its session is gone, so are its values
+            asyncio.ensure_future(self.feeds.pop(board.key).stop())
+            return
         if dev is None or dev.core.descriptor is None:
             return
         if old is not None and old.dev is dev and old.descriptor is dev.core.descriptor:

@@ -147,7 +147,7 @@ def _page(feeds: Feeds) -> None:
             for b in boards:
                 feed = feeds.feeds.get(b.key)
                 v = views.get(b.key)
-                if v is None or (feed is not None and v.generation != feed.generation):
+                if v is None or v.generation != (feed.generation if feed is not None else 0):
                     if v is not None:
                         column.remove(v.card)
                     with column:
