@@ -6,6 +6,7 @@ import argparse
 import asyncio
 import contextlib
 import signal
+import socket
 import sys
 from typing import Any, Dict, List, Tuple
 
@@ -100,7 +101,9 @@ async def _main(args: argparse.Namespace, ports: List[str], token: Any) -> int:
         with contextlib.suppress(NotImplementedError):  # no add_signal_handler on Windows
             loop.add_signal_handler(sig, stop, sig)
 
-    host = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
+    # the address to open: this machine's name when listening on every address
+    host = {"127.0.0.1": "localhost", "::1": "localhost", "0.0.0.0": socket.gethostname(),
+            "::": socket.gethostname()}.get(args.host, args.host)
 
     def started() -> None:
         url = f"http://{host}:{args.http}/" + (f"?token={token}" if token else "")
