@@ -144,7 +144,8 @@ def test_page_lists_every_board_ready_with_its_channels(page: Any) -> None:
         assert page.locator(sel("channel", f"rover.{ch}")).count() == 1, ch
     assert page.locator(sel("channel", "rover.bumper")).count() == 0  # events go to the log
     wait_text(page, sel("value", "rover.imu"), r"az: 9\.81")
-    wait_text(page, sel("health", "rover.device-heartbeat"), r"250 ms declared")
+    wait_text(page, sel("health", "rover.device-heartbeat"), r"^250 ms declared, last \d+ ms$")
+    wait_text(page, sel("health", "rover.hub-heartbeat"), r"^250 ms declared, last \d+ ms$")
 
 
 def test_a_streamed_value_updates(page: Any) -> None:

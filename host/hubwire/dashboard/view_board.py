@@ -138,14 +138,16 @@ class BoardView:
     def _refresh_health(self, feed: BoardFeed) -> None:
         h = feed.dev.health()
         st = h.stats
-        hb = feed.dev.core.link
-        peer = hb.peer_hb
+
+        def beat(declared: Optional[int], measured: Optional[int]) -> str:
+            if not declared:
+                return "-"
+            return f"{declared} ms declared" + (f", last {measured} ms" if measured else "")
+
         cells = {
             "heartbeat age": "-" if h.heartbeat_age is None else f"{h.heartbeat_age:.2f} s",
-            "device heartbeat": (f"{h.device_heartbeat_ms} ms declared"
-                                 + (f", last {peer.since_ms} ms" if peer is not None and peer.since_ms else "")
-                                 if h.device_heartbeat_ms else "-"),
-            "hub heartbeat": f"{hb.heartbeat_ms} ms declared",
+            "device heartbeat": beat(h.device_heartbeat_ms, h.device_heartbeat_since_ms),
+            "hub heartbeat": beat(h.hub_heartbeat_ms, h.hub_heartbeat_since_ms),
             "state": h.state,
             "hub receiver": " ".join(f"{k} {v}" for k, v in h.hub_counters.items()),
             "device receiver": " ".join(f"{k} {v}" for k, v in h.device_counters.items()) or "-",
