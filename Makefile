@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo bench soak fuzz-long dist clean
+.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -82,6 +82,10 @@ test-python: emulator simuno uno-firmware
 
 demo: setup simuno uno-firmware
 	bash tools/demo.sh
+
+# The browser dashboard on the same simulated Uno: http://localhost:8080/ until Ctrl-C.
+dashboard-demo: setup simuno uno-firmware
+	bash tools/demo.sh --dashboard
 
 # Every benchmark row (footprint, AVR cycles, wire bytes, hub throughput, connect time, round
 # trips, many devices) into bench/RESULTS.md.

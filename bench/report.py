@@ -15,7 +15,7 @@ import sys
 
 from common import RESULTS, ROOT, md_table, row
 
-ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many", "mqtt"]
+ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many", "mqtt", "dashboard"]
 SCALE = {
     "footprint": "peers: see Peers below (bash bench/peers.sh)",
     "rx_cycles": "CRC-16 bitwise 108 c/B, PROGMEM table 24 c/B, _crc_xmodem_update 34 c/B; COBS decode 13 c/B",
@@ -25,6 +25,7 @@ SCALE = {
     "rtt": "micro-ROS 8.8 ms at 115200",
     "many": "",
     "mqtt": "",
+    "dashboard": "",
 }
 
 

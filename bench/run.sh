@@ -5,7 +5,7 @@
 #
 # Needs what `make setup` installs, plus a bench-only venv (build/bench-venv) holding pymavlink and
 # pySerialTransfer from PyPI for the comparison in row 4: created here on first use, never .venv.
-# Takes about 2-3 minutes. A step that fails is reported as failed in RESULTS.md; the rest still run.
+# Takes about 4-5 minutes (the dashboard row: about 1.5). A step that fails is reported as failed in RESULTS.md; the rest still run.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 PY=.venv/bin/python
@@ -40,6 +40,7 @@ step connect "$PY" bench/connect.py
 step rtt "$PY" bench/rtt.py
 step many "$PY" bench/many.py
 step mqtt "$PY" bench/mqtt_bridge.py
+step dashboard "$PY" bench/dashboard.py
 "$PY" bench/report.py "$(($(date +%s) - start))" || status=1
 echo "bench: wrote bench/RESULTS.md in $(($(date +%s) - start)) s" >&2
 exit $status

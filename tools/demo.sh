@@ -9,8 +9,11 @@
 # removes the link; Ctrl-C is a normal way to end (exit status 0). Needs `make simuno uno-firmware` (and `make setup`
 # for the venv) first; `make demo` does all of it.
 #
+# `make dashboard-demo` (`tools/demo.sh --dashboard`): the same simulated Uno shown in the browser
+# dashboard instead (`hubwire dashboard`, http://localhost:8080/) until Ctrl-C.
+#
 # Environment: HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
-# default), DEMO_BOOT_DELAY_MS (default 1000).
+# default), DEMO_BOOT_DELAY_MS (default 1000), DASHBOARD_PORT (default 8080).
 set -euo pipefail
 # Job control: each command runs in its own process group and owns the terminal while it runs, so
 # Ctrl-C reaches only the hub command (which ends cleanly), not make or this script.
@@ -21,6 +24,8 @@ SIMUNO=build/simuno/simuno
 ELF=build/uno/Rover/Rover.ino.elf
 PY=${HUBWIRE_PYTHON:-.venv/bin/python}
 BOOT_DELAY_MS=${DEMO_BOOT_DELAY_MS:-1000}
+MODE=tour
+[ "${1:-}" != "--dashboard" ] || MODE=dashboard
 
 die() { echo "demo: $*" >&2; exit 1; }
 
@@ -63,6 +68,35 @@ done
 if ! grep -q "^READY $link\$" "$tmp/simuno.out" 2>/dev/null; then
   cat "$tmp/simuno.log" >&2 || true
   die "simuno did not start"
+fi
+
+if [ "$MODE" = dashboard ]; then
+  port=${DASHBOARD_PORT:-8080}
+  cat <<EOF
+================================================================================
+ Hubwire dashboard demo: examples/Rover on a simulated Arduino Uno ($link)
+
+ Open http://localhost:$port/ in a browser: live values and plots, sliders for
+ the motors, actions, the bumper's events, link health and the descriptor.
+ ${DEMO_DURATION:+It stops by itself after $DEMO_DURATION s; }Ctrl-C stops it.
+
+ With real boards:  .venv/bin/hubwire dashboard /dev/ttyACM0 [/dev/ttyACM1 ...]
+================================================================================
+EOF
+  status=0
+  if [ -n "${DEMO_DURATION:-}" ]; then
+    timeout -s INT "$DEMO_DURATION" "$PY" -m hubwire dashboard "$link" --http "$port" || status=$?
+    [ "$status" -ne 124 ] || status=0
+  else
+    "$PY" -m hubwire dashboard "$link" --http "$port" || status=$?
+  fi
+  if [ "$status" -ne 0 ] && [ "$status" -ne 130 ]; then
+    echo "demo: hubwire dashboard exited with status $status; simulator log:" >&2
+    tail -n 20 "$tmp/simuno.log" >&2 || true
+    exit "$status"
+  fi
+  echo "demo: done (simulator stopped)."
+  exit 0
 fi
 
 duration_args=()

@@ -15,6 +15,7 @@ PACKAGES=(
   clang libclang-rt-dev                                # libFuzzer + ASan/UBSan (test/fuzz)
   python3 python3-venv python3-pip python3-dev         # the hub; -dev builds cobs' C extension
   mosquitto mosquitto-clients                          # MQTT bridge tests and bench (a private broker)
+  chromium                                             # the dashboard's browser tests (Playwright drives it)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -35,6 +36,8 @@ fi
 stamp=.venv/.hubwire-installed
 if [ ! -f "$stamp" ] || [ host/pyproject.toml -nt "$stamp" ]; then
   .venv/bin/pip install -q --upgrade pip
+  # Playwright drives Debian's chromium: it must never download browsers of its own
+  export PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1
   .venv/bin/pip install -q -e "host[test,service]" platformio
   touch "$stamp"
 fi

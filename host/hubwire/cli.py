@@ -1,5 +1,5 @@
 """``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``); serve and list
-(:mod:`hubwire.service.main`)."""
+(:mod:`hubwire.service.main`); dashboard (:mod:`hubwire.dashboard`)."""
 from __future__ import annotations
 
 import argparse
@@ -164,6 +164,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .service.main import add_commands
 
     add_commands(sub, out)
+    from .dashboard.cli import add_parser as add_dashboard  # imports NiceGUI only when run
+
+    add_dashboard(sub, [common])
     return p
 
 

@@ -110,6 +110,9 @@ class SessionCore:
             hub_counters=link.decoder.counters(),
             device_counters={"crc": hb.crc, "overflow": hb.overflow, "dropped": hb.dropped} if hb else {},
             stats=self.stats.as_dict(),
+            device_heartbeat_since_ms=hb.since_ms if hb and hb.since_ms else None,
+            hub_heartbeat_ms=link.heartbeat_ms,
+            hub_heartbeat_since_ms=link.sent_since_ms or None,
         )
 
     # ---------------------------------------------------------------------------- lifecycle

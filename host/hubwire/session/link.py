@@ -93,6 +93,8 @@ class Link:
         self._peer_hb_ms = 250
         self._hb_counter = 0
         self._last_hb_tx = 0.0
+        #: ms between the hub's last two heartbeats, as it sent them (what its last heartbeat said)
+        self.sent_since_ms = 0
         self._next_hb = 0.0
         self._beats_since_up = 0
         #: hellos sent to a silent device while linked (loss detection's probes)
@@ -255,6 +257,7 @@ class Link:
         d = self.decoder
         hb = m.Heartbeat(self._hb_counter, min(since, 0xFFFF), d.crc, d.overflow, d.dropped)
         self._last_hb_tx = now
+        self.sent_since_ms = hb.since_ms
         self.send_frame(m.HEARTBEAT, self._hb_counter & 0xFF, 0, hb.pack())
         self._hb_timer = self.loop.call_later(self._next_hb - now, self._heartbeat_tick)
 

@@ -80,6 +80,9 @@ class LinkHealth:
 
     ``hub_counters`` are this hub's receiver counters (how well the hub hears the device);
     ``device_counters`` are the ones the device reported in its last heartbeat (how well it hears us).
+    Heartbeat intervals, ms: ``device_heartbeat_ms`` the device declared, ``device_heartbeat_since_ms``
+    between its last two as it measured them; ``hub_heartbeat_ms`` and ``hub_heartbeat_since_ms``
+    the same of this hub's.
     """
 
     state: str
@@ -90,3 +93,6 @@ class LinkHealth:
     hub_counters: Dict[str, int]
     device_counters: Dict[str, int]
     stats: Dict[str, int] = field(default_factory=dict)
+    device_heartbeat_since_ms: Optional[int] = None
+    hub_heartbeat_ms: Optional[int] = None
+    hub_heartbeat_since_ms: Optional[int] = None

@@ -1,0 +1,127 @@
+"""The dashboard's feeds against a registry shaped like the service's (FLEET shape), with a board
+that is unplugged (no device) and plugged again (a new device object); and DeviceFleet's keys."""
+from __future__ import annotations
+
+import asyncio
+import time
+from typing import Any, AsyncIterator, Callable, List
+
+from conftest import Emulator
+
+from hubwire import aio
+from hubwire.dashboard.feed import Feeds
+from hubwire.dashboard.fleet import Board, DeviceFleet
+
+#: generous deadline for a busy machine: many heartbeat intervals (250 ms) and stream periods
+DEADLINE = 20.0
+
+
+class StandInFleet:
+    """The registry shape `hubwire serve` provides, driven by the test."""
+
+    def __init__(self, boards: List[Board]) -> None:
+        self._boards = {b.key: b for b in boards}
+        self._queues: List["asyncio.Queue[Board]"] = []
+
+    def boards(self) -> List[Board]:
+        return list(self._boards.values())
+
+    def get(self, key: str) -> Board:
+        return self._boards[key]
+
+    async def changes(self) -> AsyncIterator[Board]:
+        q: "asyncio.Queue[Board]" = asyncio.Queue()
+        self._queues.append(q)
+        while True:
+            yield await q.get()
+
+    def changed(self, b: Board) -> None:
+        for q in self._queues:
+            q.put_nowait(b)
+
+
+async def until(pred: Callable[[], Any], what: str) -> None:
+    end = time.monotonic() + DEADLINE
+    while not pred():
+        assert time.monotonic() < end, f"timed out waiting for {what}"
+        await asyncio.sleep(0.02)
+
+
+def test_a_board_unplugged_loses_its_feed_and_plugged_again_gets_a_new_one(emulator: Emulator,
+                                                                           cache_dir: str) -> None:
+    async def scenario() -> None:
+        dev = await aio.connect(emulator.link, cache_dir=cache_dir)
+        board = Board("rover", "rover", None, emulator.link, "ready", dev)
+        fleet = StandInFleet([board])
+        feeds = Feeds(fleet, stream_hz=50.0)
+        await feeds.start()
+        first = feeds.feeds["rover"]
+        await until(lambda: first.records["imu"].count >= 2, "imu samples")
+        assert first.records["failsafes"].read == "read"  # not streamable: read instead
+
+        await dev.close()
+        board.device, board.state, board.port = None, "unplugged", None
+        fleet.changed(board)
+        await until(lambda: "rover" not in feeds.feeds, "the feed of the unplugged board to go")
+
+        dev2 = await aio.connect(emulator.link, cache_dir=cache_dir)
+        board.device, board.state, board.port = dev2, "ready", emulator.link
+        fleet.changed(board)
+        await until(lambda: "rover" in feeds.feeds, "a feed for the board plugged again")
+        second = feeds.feeds["rover"]
+        assert second is not first and second.dev is dev2 and second.generation > first.generation
+        await until(lambda: second.records["imu"].count >= 2, "imu samples from the new session")
+        emulator.bump()
+        await until(lambda: second.event_count == 1, "the bumper event")
+        assert [(e.n, e.name, e.value) for e in second.events] == [(1, "bumper", True)]
+        ok, msg = await second.write(dev2.channel("left"), 2.0)
+        assert not ok and msg.startswith("refused (OUT_OF_RANGE)")
+        ok, msg = await second.call(dev2.channel("selftest"), 2)
+        assert (ok, msg) == (True, "2")
+        await feeds.stop()
+        await dev2.close()
+
+    asyncio.run(scenario())
+
+
+def test_device_fleet_keys_boards_by_name_and_tells_their_state(emulator_path: str, tmp_path: Any,
+                                                               cache_dir: str) -> None:
+    a, b = Emulator(emulator_path, str(tmp_path / "a")), Emulator(emulator_path, str(tmp_path / "b"))
+    a.start()
+    b.start()
+
+    async def scenario() -> None:
+        async with DeviceFleet([a.link, b.link, str(tmp_path / "absent")], cache_dir=cache_dir) as fleet:
+            told: List[Any] = []
+
+            async def follow() -> None:
+                async for x in fleet.changes():
+                    told.append((x.port, x.state))  # a snapshot as it is told
+
+            follower = asyncio.ensure_future(follow())
+            await until(lambda: len(fleet.boards()) == 2, "both boards")
+            keys = sorted(x.key for x in fleet.boards())
+            assert keys[0] == "rover" and keys[1] in ("rover-a", "rover-b"), keys  # same name: the port
+            assert list(fleet.pending) == [str(tmp_path / "absent")]
+            board = next(x for x in fleet.boards() if x.port == a.link)
+            assert fleet.get(board.key) is board and board.state == "ready"
+            a.pause()  # silent: the link is declared lost
+            await until(lambda: (a.link, "lost") in told, "the board told lost")
+            a.resume()
+            await until(lambda: told[-1] == (a.link, "ready") if told else False, "the board told back")
+            mine = [st for port, st in told if port == a.link]
+            assert mine[0] == "ready" and "lost" in mine and mine[-1] == "ready", mine
+            assert all(x != y for x, y in zip(mine, mine[1:])), mine  # each change told once
+            follower.cancel()
+        try:
+            fleet.get("nope")
+        except KeyError as e:
+            assert "rover" in str(e)
+        else:
+            raise AssertionError("no KeyError")
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        a.stop()
+        b.stop()

@@ -1,0 +1,136 @@
+"""The dashboard's choices and records without a browser: widgets from descriptors, plot columns,
+history windows, CSV, the token gate and the address check."""
+from __future__ import annotations
+
+import asyncio
+import json
+from typing import Any, Dict, List, MutableMapping, Tuple
+
+import pytest
+
+from hubwire.descriptor import parse_descriptor
+from hubwire.dashboard import model
+from hubwire.dashboard.server import TOKEN_COOKIE, TokenGate, is_loopback, resolve_token
+
+DESC = {"p": 1, "n": "bot", "ch": [
+    {"id": 1, "n": "speed", "a": "rws", "t": "f32", "min": -1, "max": 1, "u": "m/s"},
+    {"id": 2, "n": "count", "a": "rw", "t": "u16"},
+    {"id": 3, "n": "led", "a": "rw", "t": "bool"},
+    {"id": 4, "n": "label", "a": "rw", "t": "str", "c": 8},
+    {"id": 5, "n": "pose", "a": "rws", "t": "struct", "f": [{"n": "x", "t": "f32"}, {"n": "g", "t": "i16", "c": 2}]},
+    {"id": 6, "n": "gains", "a": "w", "t": "u8", "c": 3},
+    {"id": 7, "n": "half", "a": "w", "t": "i8", "min": 0},
+]}
+
+
+def channels() -> Dict[str, Any]:
+    d = parse_descriptor(json.dumps(DESC).encode())
+    return {c.name: c for c in d.channels}
+
+
+def test_each_writable_gets_the_input_its_type_and_range_call_for() -> None:
+    ch = channels()
+    got = {n: model.widget_for(c) for n, c in ch.items()}
+    assert got == {"speed": "slider", "count": "number", "led": "toggle", "label": "text", "pose": "json",
+                   "gains": "json", "half": "number"}  # half has one end of a range only
+
+
+def test_numbers_are_plotted_and_strings_are_not() -> None:
+    ch = channels()
+    assert [n for n, c in ch.items() if model.plottable(c)] == ["speed", "count", "led", "pose"]
+
+
+def test_a_struct_is_plotted_as_one_column_per_number() -> None:
+    rec = model.ChannelRecord(channels()["pose"], 10.0)
+    rec.add({"x": 1.5, "g": [3, -4]}, at=100.0)
+    rec.add({"x": 2.0, "g": [5, 6]}, at=100.5)
+    assert rec.columns == ["pose.x", "pose.g[0]", "pose.g[1]"]
+    times, rows = rec.window(10.0, now=101.0)
+    assert rows == [(1.5, 3.0, -4.0), (2.0, 5.0, 6.0)]
+    assert model.to_csv(rec.columns, times, rows).splitlines() == [
+        "time,pose.x,pose.g[0],pose.g[1]", "100.000000,1.5,3,-4", "100.500000,2,5,6"]
+
+
+def test_history_keeps_the_last_minutes_and_a_window_picks_from_it() -> None:
+    rec = model.ChannelRecord(channels()["speed"], 10.0)
+    for i in range(3000):
+        rec.add(i / 1000.0, at=float(i))
+    times, rows = rec.window(10.0, now=2999.0)
+    assert times == [float(t) for t in range(2989, 3000)] and rows[-1] == (2.999,)
+    times, rows = rec.window(1e6, now=2999.0)
+    assert times[0] == 2999 - model.HISTORY_S and len(rows) == model.HISTORY_S + 1
+
+
+def test_the_achieved_rate_counts_arrivals_in_its_window() -> None:
+    rec = model.ChannelRecord(channels()["speed"], 10.0)
+    for i in range(50):
+        rec.add(0.0, at=10.0 + i * 0.1)  # 10 per second for 5 s
+    assert rec.achieved(now=14.9) == pytest.approx(10.0, abs=0.5 + 1 / model.RATE_WINDOW_S)
+    assert rec.achieved(now=14.9 + model.RATE_WINDOW_S + 0.01) == 0.0
+
+
+def test_decimation_spreads_points_and_keeps_the_newest() -> None:
+    times = [float(i) for i in range(1000)]
+    idx = model.decimate(times, [(t,) for t in times], 100)
+    assert len(idx) <= 101 and idx[0] == 0 and idx[-1] == 999 and idx == sorted(set(idx))
+    assert model.decimate(times[:5], [(t,) for t in times[:5]], 100) == [0, 1, 2, 3, 4]
+
+
+@pytest.mark.parametrize("host,loop", [("127.0.0.1", True), ("::1", True), ("localhost", True),
+                                       ("127.5.0.1", True), ("0.0.0.0", False), ("192.168.1.4", False)])
+def test_loopback_addresses(host: str, loop: bool) -> None:
+    assert is_loopback(host) is loop
+
+
+def test_a_network_address_gets_a_token_unless_one_is_given() -> None:
+    assert resolve_token("127.0.0.1", None) is None
+    made = resolve_token("0.0.0.0", None)
+    assert made and len(made) >= 16 and made != resolve_token("0.0.0.0", None)
+    assert resolve_token("0.0.0.0", "mine") == "mine"
+
+
+def _call(gate: TokenGate, kind: str, query: bytes = b"", cookie: str = "") -> Tuple[List[Any], bool]:
+    sent: List[MutableMapping[str, Any]] = []
+    reached = []
+
+    async def app(scope: Any, receive: Any, send: Any) -> None:
+        reached.append(scope)
+        await send({"type": "http.response.start", "status": 200, "headers": []})
+
+    async def receive() -> MutableMapping[str, Any]:
+        return {}
+
+    async def send(msg: MutableMapping[str, Any]) -> None:
+        sent.append(msg)
+
+    gate.app = app
+    headers = [(b"cookie", cookie.encode())] if cookie else []
+    asyncio.run(gate({"type": kind, "query_string": query, "headers": headers}, receive, send))
+    return sent, bool(reached)
+
+
+def test_the_token_gate_lets_in_only_who_gives_the_token() -> None:
+    gate = TokenGate(None, "s3cret")
+    sent, reached = _call(gate, "http")
+    assert not reached and sent[0]["status"] == 401
+    sent, reached = _call(gate, "http", b"token=wrong")
+    assert not reached and sent[0]["status"] == 401
+    sent, reached = _call(gate, "websocket")
+    assert not reached and sent[0] == {"type": "websocket.close", "code": 1008}
+    sent, reached = _call(gate, "http", b"token=s3cret")
+    assert reached and (b"set-cookie", f"{TOKEN_COOKIE}=s3cret; Path=/; HttpOnly; SameSite=Strict".encode()) \
+        in sent[0]["headers"]
+    sent, reached = _call(gate, "websocket", cookie=f"other=1; {TOKEN_COOKIE}=s3cret")
+    assert reached
+    sent, reached = _call(gate, "websocket", cookie=f"{TOKEN_COOKIE}=s3cre")
+    assert not reached
+
+
+def test_rates_from_the_command_line() -> None:
+    from hubwire.dashboard.cli import parse_rates
+
+    assert parse_rates([]) == (10.0, {})
+    assert parse_rates(["1", "imu=100", "rover.left=50"]) == (1.0, {"imu": 100.0, "rover.left": 50.0})
+    for bad in (["0"], ["imu=fast"], ["imu=2000"]):
+        with pytest.raises(ValueError):
+            parse_rates(bad)
