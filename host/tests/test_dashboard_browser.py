@@ -118,7 +118,13 @@ def field(page: Any, kind: str, key: str) -> Any:
 def wait_text(page: Any, selector: str, pattern: str) -> str:
     """Scroll to the element (channels off screen are not redrawn), wait until its text matches
     ``pattern``; its text."""
-    page.locator(selector).scroll_into_view_if_needed()
+    for attempt in range(20):  # a board's card is drawn anew when its device changes (a replug)
+        try:
+            page.locator(selector).scroll_into_view_if_needed()
+            break
+        except playwright_api.Error:
+            if attempt == 19:
+                raise
     playwright_api.expect(page.locator(selector)).to_have_text(re.compile(pattern), timeout=WAIT_MS)
     return str(page.locator(selector).inner_text())
 

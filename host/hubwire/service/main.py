@@ -7,7 +7,7 @@ import inspect
 import logging
 import signal
 import sys
-from typing import Any, Callable, List, Optional, Tuple
+from typing import Any, Awaitable, Callable, List, Optional, Sequence, Tuple
 
 from .fleet import Fleet
 from .protocol import default_serve_socket
@@ -34,6 +34,13 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
     s.add_argument("--poll", type=float, default=0.5, help="seconds between port scans (default 0.5)")
     s.add_argument("--mqtt", metavar="HOST:PORT", default=None,
                    help="also run the MQTT bridge to this broker (hubwire.service.mqtt)")
+    s.add_argument("--http", type=int, default=None, metavar="HTTP_PORT",
+                   help="also serve the dashboard on this port (hubwire.dashboard; docs/DASHBOARD.md)")
+    s.add_argument("--http-host", default="127.0.0.1",
+                   help="address the dashboard listens on (default 127.0.0.1: this machine only)")
+    s.add_argument("--token", default=None,
+                   help="secret the dashboard's browsers must give (?token=...); made up and printed when "
+                        "--http-host is not loopback and none is given")
     s.add_argument("-v", "--verbose", action="store_true", help="log every board and link change")
     s.set_defaults(fn=cmd_serve)
     s = sub.add_parser("list", parents=[out], help="boards known to the running hubwire serve")
@@ -41,24 +48,29 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
 
 
 async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] = None,
-                mqtt: Optional[str] = None, ready: Any = None) -> None:
+                mqtt: Optional[str] = None, ready: Any = None,
+                clients: Sequence[Callable[[Fleet], Awaitable[Any]]] = ()) -> None:
     """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`);
-    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``."""
+    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``;
+    each of ``clients`` (the dashboard) runs on the fleet as one more task until the service stops."""
     server = Server(fleet, socket)
     await server.start()
     await fleet.start()
     task: Optional["asyncio.Future[Any]"] = None
+    others: List["asyncio.Future[Any]"] = []
     try:
         if bridge is not None and mqtt is not None:
             host, port = broker_address(mqtt)
             res = bridge(fleet, host=host, port=port)
             task = asyncio.ensure_future(res) if inspect.isawaitable(res) else None
+        others = [asyncio.ensure_future(c(fleet)) for c in clients]
         if ready is not None:
             ready()
         await asyncio.Event().wait()
     finally:
-        if task is not None:
-            task.cancel()
+        for t in ([task] if task is not None else []) + others:
+            t.cancel()
+        await asyncio.gather(*others, return_exceptions=True)
         await server.close()
         await fleet.close()
 
@@ -81,12 +93,32 @@ def mqtt_bridge() -> Callable[..., Any]:
     return run_bridge
 
 
+def dashboard(args: argparse.Namespace) -> Callable[[Fleet], Awaitable[Any]]:
+    """The dashboard on the service's boards (``--http``), or SystemExit saying how to install it."""
+    try:
+        from ..dashboard import resolve_token, run_dashboard
+    except ImportError as e:
+        raise SystemExit(f"hubwire serve: --http needs the dashboard's libraries, which this installation "
+                         f"lacks ({e}); install them with: pip install 'hubwire[dashboard]'") from None
+    token = resolve_token(args.http_host, args.token)
+
+    def started() -> None:
+        where = "localhost" if args.http_host in ("127.0.0.1", "::1") else args.http_host
+        print(f"hubwire serve: dashboard at http://{where}:{args.http}/" + (f"?token={token}" if token else ""),
+              file=sys.stderr, flush=True)
+
+    async def run(fleet: Fleet) -> None:
+        await run_dashboard(fleet, args.http_host, args.http, token, started=started)
+    return run
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="hubwire serve: %(message)s" if not args.verbose else "%(asctime)s %(message)s")
     logging.getLogger("hubwire.service").setLevel(logging.INFO)
     sock = args.socket or default_serve_socket()
     bridge = mqtt_bridge() if args.mqtt else None
+    clients = [dashboard(args)] if args.http is not None else []
     fleet = Fleet(ports=args.ports, globs=args.watch, usb=not args.no_usb, connect_timeout=args.timeout,
                   poll_interval=args.poll)
 
@@ -95,7 +127,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
-        await serve(fleet, sock, bridge, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True))
+        await serve(fleet, sock, bridge, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True),
+                    clients=clients)
 
     try:
         asyncio.run(main())
