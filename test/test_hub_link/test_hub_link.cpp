@@ -300,6 +300,33 @@ TEST_F(HubLinkTest, EventsAndRequestsShareOneCounter) {
   EXPECT_EQ(only(out2, kMsgRequest)[0].seq, (uint8_t)(e2[0].seq + 1));
 }
 
+// An event acked in the update after it went, before the link's next look at the queue: the next
+// events and requests must still take seqs of their own (a repeated event seq is a duplicate to
+// the hub, which drops the event).
+TEST_F(HubLinkTest, EventsAckedAtOnceNeverRepeatASeq) {
+  link();
+  bind({0, 0, 0, 0});
+  std::vector<uint8_t> seqs;
+  for (uint8_t v = 1; v <= 3; ++v) ASSERT_TRUE(device.emit(overheat, v));
+  for (int i = 0; i < 3; ++i) {
+    auto e = only(step(), kMsgEvent);
+    ASSERT_EQ(e.size(), 1u) << i;
+    seqs.push_back(e[0].seq);
+    if (i == 1) step();  // the link sees this one in flight before its ACK
+    sendFrame(stream, kMsgAck, e[0].seq, e[0].id);
+  }
+  step();
+  device.request(setpoint);
+  auto r = only(step(), kMsgRequest);
+  ASSERT_EQ(r.size(), 1u);
+  seqs.push_back(r[0].seq);
+  ASSERT_TRUE(device.emit(overheat, 4));
+  auto e4 = only(step(), kMsgEvent);
+  ASSERT_EQ(e4.size(), 1u);
+  seqs.push_back(e4[0].seq);
+  for (size_t i = 1; i < seqs.size(); ++i) EXPECT_EQ(seqs[i], (uint8_t)(seqs[i - 1] + 1)) << i;
+}
+
 TEST_F(HubLinkTest, ARetriedBindReportIsAnsweredAgainNotApplied) {
   link();
   sendFrame(stream, kMsgControl, 0x30, 0, Bytes{1, 0, 2, 0, 0});

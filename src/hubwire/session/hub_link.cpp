@@ -182,10 +182,14 @@ void Session::hubBind(const Frame& f) {
 void Session::hubPoll(uint16_t now) {
   HubLink& l = hubLink;
   // Events and the device's R, C, J take their seq from one counter: a head event about to be sent
-  // for the first time (later in this update()) takes the next one.
+  // for the first time (later in this update()) takes the next one. It is numbered when it has no
+  // number yet from the counter's last value: the event before it may have been sent and acked
+  // since the last poll (the queue's seq is then the counter's, not one below), and a request
+  // numbered since takes the counter on.
+  if ((int8_t)(events_.seq() - l.counter) > 0) l.counter = events_.seq();  // sent before the link began
   if (!events_.size() || events_.inFlight()) {
     l.eventNumbered = false;
-  } else if (!l.eventNumbered) {
+  } else if (!l.eventNumbered || (uint8_t)(events_.seq() + 1) != l.counter) {
     events_.nextSeqIs(++l.counter);
     l.eventNumbered = true;
   }

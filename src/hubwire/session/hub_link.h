@@ -71,8 +71,8 @@ class HubLink {
   Entry queue[HUBWIRE_HUB_QUEUE];
   uint8_t head, queued;
   uint8_t counter;  // the device's transaction counter: its events and its R, C, J
-  uint8_t headSeq;
   bool eventNumbered;  // the head event, not sent yet, has its seq from counter
+  uint8_t headSeq;
   bool hubKnown;    // hubNonce: the hub session the link last saw (the session's, copied)
   uint32_t hubNonce;
   bool bound;       // the bind report of this hub session has arrived
