@@ -26,9 +26,11 @@ from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optio
 from . import ops
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, Timeout
+from .hub_face import HubMethods
 from .ports import find_port
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
 from .session.events import EventSink
+from .session.hub_channels import HubSide
 from .session.runner import LoopDispatcher
 from .text import clip
 from .transport import SerialTransport, Transport
@@ -44,7 +46,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 
     Keyword arguments as :func:`hubwire.connect`: ``heartbeat_ms``, ``retry_timeout``, ``tries``,
     ``cache_dir``, ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``,
-    ``serial_kwargs``.
+    ``serial_kwargs``, ``hub`` (hub channels; handlers may be coroutines, run on this loop).
     """
     if transport is None:
         transport = SerialTransport(url if url is not None else find_port(), baudrate,
@@ -86,12 +88,16 @@ class _Connecting:
             await self._dev.close()
 
 
-class AsyncDevice:
+class AsyncDevice(HubMethods):
     """A connected device for asyncio code: ``await dev.read(name)``, ``await dev.write(name, v)``,
-    ``await dev.call(name, arg)``, ``dev.stream(name, hz=...)``, ``dev.events(...)``, ``dev.on(...)``."""
+    ``await dev.call(name, arg)``, ``dev.stream(name, hz=...)``, ``dev.events(...)``, ``dev.on(...)``;
+    hub channels as on :class:`hubwire.Device` (``dev.provide``, ``dev.action``, ``dev.notify``...)."""
 
     def __init__(self, core: SessionCore) -> None:
         self._core = core
+
+    def _hub_side(self) -> HubSide:
+        return self._core.hub
 
     @property
     def core(self) -> SessionCore:

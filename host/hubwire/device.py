@@ -6,9 +6,11 @@ from typing import Any, Callable, List, Optional, Tuple
 from . import ops
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError
+from .hub_face import HubMethods
 from .iterators import EventStream, Stream
 from .ports import KNOWN_USB_VIDS, find_port
 from .session import LinkHealth, Session
+from .session.hub_channels import HubSide
 from .text import clip, clip_list, show
 from .transport import Transport
 
@@ -23,7 +25,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 
     ``timeout`` is the connect deadline in seconds. Other keyword arguments go to
     :class:`hubwire.session.Session` (``heartbeat_ms``, ``retry_timeout``, ``tries``, ``cache_dir``,
-    ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``).
+    ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``) and
+    ``hub``: a :class:`hubwire.HubChannels` the device may use; a hub channel the device expects
+    that it lacks, or declares with another type or access, raises :class:`HubChannelError` here.
 
     Use it as a context manager to close the link at the end::
 
@@ -63,7 +67,7 @@ def channel_table(desc: Descriptor) -> str:
     return "\n".join(lines)
 
 
-class Device:
+class Device(HubMethods):
     """A connected device: its channels as items, and as attributes where the name is free.
 
     - ``dev["left"]`` / ``dev.left`` reads a readable channel;
@@ -72,7 +76,9 @@ class Device:
     - ``dev.beep(200)`` / ``dev["beep"](200)`` calls a callable channel and returns its result;
     - ``dev.read(name)``, ``dev.write(name, value)``, ``dev.call(name, arg)`` do the same by name;
     - ``dev.on("bumper", callback)``, ``dev.events()``, ``dev.stream("imu", hz=50)``;
-    - ``print(dev.table())`` shows the table of channels.
+    - ``print(dev.table())`` shows the table of channels;
+    - the other direction: ``dev.provide``, ``dev.accept``, ``dev.action``, ``dev.event`` declare
+      hub channels the device may use, ``dev.notify(name, value)`` sends it a hub event.
 
     Methods and properties of this class always win: a channel called ``close``, ``read``,
     ``session``, ``name`` or ``__class__`` never hides or replaces one. Reach it with ``dev["close"]``
@@ -91,6 +97,9 @@ class Device:
     def session(self) -> Session:
         """The underlying :class:`hubwire.session.Session`."""
         return self._session
+
+    def _hub_side(self) -> HubSide:
+        return self._session.core.hub
 
     def _desc(self) -> Descriptor:
         d = self._session.descriptor

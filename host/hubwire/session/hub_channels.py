@@ -1,0 +1,425 @@
+"""The hub's own channels in one session (PROTOCOL.md §10): answering the device's ``R``/``C``/``J``,
+the bind report (``C`` id 0) and the queue of hub events (``!``) to the device.
+
+- Device transactions are answered only once the device's descriptor is loaded (its ``"hub"`` list
+  maps its hub ids to names); before that the device's retries are the flow control. A device ``C``
+  with the seq and id of the last device transaction is a duplicate: its remembered answer is sent
+  again, the handler does not run twice (memory reset by a new device nonce).
+- Handlers run where the application's callbacks run (the dispatcher thread, or the caller's loop
+  for ``hubwire.aio``); the answer is sent when they return.
+- The bind report goes out every time the session becomes ready and whenever the hub's channel set
+  changes; it is a ``C`` so it never overlaps an application's ``C`` (the device's duplicate
+  detection for controls stays exact: :meth:`Transactions.claim_control`).
+- Hub events: one queue per device session object, one event unacked at a time, the head retried
+  every retry interval while linked, without limit, with the same seq; the queue survives link
+  loss and device reboots. Sent only once the device acked the bind report in this pairing of
+  device and hub sessions, and only for names it listed with access ``e``.
+"""
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+from collections import deque
+from typing import Any, Callable, Deque, List, Optional, Tuple
+
+from ..descriptor import Channel, Descriptor
+from ..errors import HubChannelError, HubwireError, InvalidValue
+from ..hub import HubChannel, HubChannels, bind_status
+from ..text import clip
+from ..wire import messages as m
+from ..wire.frame import Frame
+from ..wire.messages import NakCode
+
+__all__ = ["HubSide", "HUB_EVENT_QUEUE_LIMIT", "BIND_REPORT_VERSION"]
+
+log = logging.getLogger("hubwire")
+
+#: hub events waiting for one device; notify() raises beyond it
+HUB_EVENT_QUEUE_LIMIT = 4096
+#: first byte of the bind report's payload
+BIND_REPORT_VERSION = 1
+
+
+class _Queued:
+    __slots__ = ("name", "payload", "seq", "id")
+
+    def __init__(self, name: str, payload: bytes) -> None:
+        self.name = name
+        self.payload = payload
+        self.seq: Optional[int] = None  # drawn at the first send, kept for every retry
+        self.id = 0
+
+
+class HubSide:
+    """The hub channels of one :class:`SessionCore`: ``core`` provides ``loop``, ``link``, ``tx``,
+    ``stats``, ``dispatch``, ``decodable()``, ``is_ready()`` and ``retry_timeout``."""
+
+    def __init__(self, core: Any, channels: HubChannels) -> None:
+        self.core = core
+        self.loop: asyncio.AbstractEventLoop = core.loop
+        self.channels = channels
+        self.queue: Deque[_Queued] = deque()
+        self._lock = threading.Lock()
+        #: (device nonce, hub nonce) the device acked a bind report for
+        self.bound_key: Optional[Tuple[int, int]] = None
+        #: the statuses of the last bind report sent (hub id k at index k-1)
+        self.statuses: Tuple[int, ...] = ()
+        self._bind: Optional[Tuple[int, bytes]] = None  # (seq, payload) outstanding
+        self._bind_wanted = False
+        self._head_out = False  # the head event is sent and unanswered
+        self._timer: Optional[asyncio.TimerHandle] = None
+        # duplicate detection of device transactions
+        self._device_nonce: Optional[int] = None
+        self._last: Optional[Tuple[int, int, int]] = None  # type, seq, id
+        self._last_answer: Optional[Tuple[int, bytes]] = None  # None while its handler runs
+        self._epoch = 0
+        channels.add_listener(self)
+
+    # ----------------------------------------------------------------------- declarations
+
+    def hub_changed(self, hc: HubChannel, removed: bool) -> None:
+        """A declaration changed (any thread): refuse one the connected device expects otherwise,
+        then report the new binding."""
+        desc = self.core.descriptor
+        if not removed and desc is not None:
+            for exp in desc.hub:
+                if exp.name == hc.name:
+                    code = bind_status(exp, hc)
+                    if code:
+                        raise HubChannelError(mismatch(exp, hc, code, desc.name))
+        self.loop.call_soon_threadsafe(self.rebind)
+
+    def check_all(self, desc: Descriptor) -> None:
+        """Raise HubChannelError naming every hub channel the device uses that the hub lacks or
+        declares otherwise (connect() with channels declared beforehand)."""
+        bad = [mismatch(exp, self.channels.get(exp.name), code, desc.name)
+               for exp in desc.hub for code in (bind_status(exp, self.channels.get(exp.name)),) if code]
+        if bad:
+            raise HubChannelError("; ".join(bad))
+
+    def rebind(self) -> None:
+        self._bind_wanted = True
+        self.kick()
+
+    def close(self) -> None:
+        self.channels.remove_listener(self)
+        self.link_down()
+
+    # ------------------------------------------------------------------------- the pump
+
+    def on_ready(self) -> None:
+        """The session became ready (discovered, or the link is back): report the binding again."""
+        self.rebind()
+
+    def link_down(self) -> None:
+        """Nothing is answered while the link is down: stop retrying (the head keeps its seq)."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if self._bind is not None:
+            self._bind = None
+            self._bind_wanted = True
+            self.core.tx.release_control()
+        self._head_out = False
+
+    def _key(self) -> Optional[Tuple[int, int]]:
+        h = self.core.link.device_hello
+        return None if h is None else (h.nonce, self.core.link.nonce)
+
+    def kick(self) -> None:
+        """Send what is due: the bind report first, then the head event."""
+        core = self.core
+        desc = core.decodable()
+        if desc is None or not core.is_ready() or not core.link.linked or not desc.hub:
+            return
+        if self._bind_wanted and self._bind is None:
+            if not core.tx.claim_control("hub"):
+                return  # an application's C is in flight: kicked again when it ends
+            self._bind_wanted = False
+            self.statuses = tuple(bind_status(exp, self.channels.get(exp.name)) for exp in desc.hub)
+            payload = bytes((BIND_REPORT_VERSION,) + self.statuses)
+            h = core.link.device_hello
+            if len(payload) > h.max_payload:
+                core.tx.release_control()
+                log.error("hubwire: %d hub channels do not fit the bind report %s accepts", len(desc.hub), desc.name)
+                return
+            self._bind = (core.tx.next_seq(), payload)
+            core.stats.binds_sent += 1
+            failed = [f"{exp.name}: {m.nak_name(s)}" for exp, s in zip(desc.hub, self.statuses) if s]
+            if failed:
+                log.warning("hubwire: %s uses hub channels the hub does not offer as it expects: %s",
+                            desc.name, clip(", ".join(failed), 200))
+            self._send_bind()
+        if self.bound_key == self._key() and not self._head_out:
+            self._send_head(desc)
+        self._arm()
+
+    def _send_bind(self) -> None:
+        assert self._bind is not None
+        seq, payload = self._bind
+        self.core.link.send_frame(m.CONTROL, seq, 0, payload)
+
+    def _send_head(self, desc: Descriptor) -> None:
+        while self.queue:
+            ev = self.queue[0]
+            exp = next((c for c in desc.hub if c.name == ev.name), None)
+            if exp is None or "e" not in exp.access:
+                self.queue.popleft()
+                self.core.stats.hub_events_skipped += 1
+                log.warning("hubwire: %s takes no event %s: not sent", desc.name, clip(ev.name))
+                continue
+            if ev.seq is None:
+                ev.seq = self.core.tx.next_seq()
+            ev.id = exp.id
+            self.core.link.send_frame(m.EVENT, ev.seq, ev.id, ev.payload)
+            self._head_out = True
+            return
+
+    def _arm(self) -> None:
+        if self._timer is None and (self._bind is not None or self._head_out):
+            self._timer = self.loop.call_later(self.core.retry_timeout, self._retry)
+
+    def _retry(self) -> None:
+        self._timer = None
+        if not self.core.link.linked:
+            return
+        if self._bind is not None:
+            self.core.stats.bind_retries += 1
+            self._send_bind()
+        if self._head_out and self.queue:
+            self.core.stats.hub_event_retries += 1
+            ev = self.queue[0]
+            self.core.link.send_frame(m.EVENT, ev.seq or 0, ev.id, ev.payload)
+        self._arm()
+
+    def on_answer(self, f: Frame) -> bool:
+        """An ACK/NAK of the bind report or of the head event; False if it answers neither."""
+        if self._bind is not None and f.id == 0 and f.seq == self._bind[0]:
+            self._bind = None
+            self.core.tx.release_control()
+            if f.type == m.ACK:
+                self.bound_key = self._key()
+            else:
+                log.warning("hubwire: device refused the bind report: %s", m.nak_name(f.payload[0] if f.payload else 0))
+            self._kick_later()
+            return True
+        if self._head_out and self.queue and f.seq == self.queue[0].seq and f.id == self.queue[0].id:
+            ev = self.queue.popleft()
+            self._head_out = False
+            if f.type == m.ACK:
+                self.core.stats.hub_events_delivered += 1
+            else:
+                self.core.stats.hub_events_refused += 1
+                log.warning("hubwire: device refused event %s: %s", clip(ev.name),
+                            m.nak_name(f.payload[0] if f.payload else 0))
+            self._kick_later()
+            return True
+        return False
+
+    def _kick_later(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self.kick()
+
+    # ----------------------------------------------------------------------------- events
+
+    def notify(self, name: str, value: Any) -> None:
+        """Queue event ``name`` for the device (any thread); raises at once for a name that is not a
+        hub event, a value that does not fit, or a device that takes no such event."""
+        hc = self.channels[name]
+        if not hc.is_event:
+            raise HubChannelError(f"hub channel {name!r} is not an event (declare it with hub.event())")
+        desc = self.core.descriptor
+        if desc is not None:
+            exp = next((c for c in desc.hub if c.name == name), None)
+            if exp is None or "e" not in exp.access:
+                raise HubChannelError(f"{desc.name} takes no hub event {name!r}")
+        payload = hc.channel.codec.encode(hc.channel.check(value))
+        with self._lock:
+            if len(self.queue) >= HUB_EVENT_QUEUE_LIMIT:
+                raise HubwireError(f"{HUB_EVENT_QUEUE_LIMIT} hub events wait for the device already")
+            self.queue.append(_Queued(name, payload))
+        self.loop.call_soon_threadsafe(self.kick)
+
+    # -------------------------------------------------------------- device transactions
+
+    def on_device_frame(self, f: Frame) -> None:
+        """A device ``R``, ``C`` or ``J`` (request)."""
+        core = self.core
+        desc = core.decodable()
+        if desc is None or not core.link.linked:
+            core.stats.device_unanswered += 1
+            return  # not answered: the device retries
+        nonce = core.link.device_hello.nonce
+        if nonce != self._device_nonce:
+            self._device_nonce, self._last, self._last_answer = nonce, None, None
+            self._epoch += 1
+        key = (f.type, f.seq, f.id)
+        if f.type == m.CONTROL and key == self._last:
+            core.stats.device_duplicates += 1
+            if self._last_answer is not None:  # else its handler still runs: answered when it returns
+                core.link.send_frame(self._last_answer[0], f.seq, f.id, self._last_answer[1])
+            return
+        self._last, self._last_answer = key, None
+        if f.type == m.CHUNK:
+            self._chunk(f)
+            return
+        exp = next((c for c in desc.hub if c.id == f.id), None)
+        hc = None if exp is None else self.channels.get(exp.name)
+        if exp is None or hc is None:
+            self._reply(f, m.NAK, bytes((NakCode.UNKNOWN_CHANNEL,)))
+        elif f.type == m.REQUEST:
+            core.stats.device_reads += 1
+            self._read(f, exp, hc)
+        elif "w" in exp.access:
+            core.stats.device_writes += 1
+            self._write(f, exp, hc)
+        else:
+            core.stats.device_calls += 1
+            self._call(f, exp, hc)
+
+    def _reply(self, f: Frame, type: int, payload: bytes = b"", epoch: Optional[int] = None) -> None:
+        if epoch is not None and epoch != self._epoch:
+            return  # the device rebooted while the handler ran
+        if type == m.NAK:
+            self.core.stats.device_refused += 1
+        if self._last == (f.type, f.seq, f.id):
+            self._last_answer = (type, payload)
+        self.core.link.send_frame(type, f.seq, f.id, payload)
+
+    def _chunk(self, f: Frame) -> None:
+        req = m.ChunkRequest.unpack(f.payload)
+        raw = self.channels.descriptor()
+        if req.offset > len(raw):
+            self._reply(f, m.NAK, bytes((NakCode.BAD_OFFSET,)))
+            return
+        room = max(0, self.core.link.device_hello.max_payload - 4)
+        data = raw[req.offset:req.offset + min(req.want, room)]
+        self._reply(f, m.CHUNK, m.Chunk(req.offset, len(raw), data).pack())
+
+    def _read(self, f: Frame, exp: Channel, hc: HubChannel) -> None:
+        if "r" not in exp.access or not hc.readable:
+            self._reply(f, m.NAK, bytes((NakCode.NOT_READABLE,)))
+        elif bind_status(exp, hc):
+            self._reply(f, m.NAK, bytes((bind_status(exp, hc),)))
+        elif hc.getter is None:
+            self._answer_value(f, hc, hc.channel.codec, hc.value, self._epoch)
+        else:
+            self._run(f, hc.getter, (), lambda v, e: self._answer_value(f, hc, hc.channel.codec, v, e))
+
+    def _write(self, f: Frame, exp: Channel, hc: HubChannel) -> None:
+        value = self._argument(f, exp, hc, hc.writable)
+        if value is _REFUSED:
+            return
+        if hc.on_write is None:
+            hc.store(value)
+            self._reply(f, m.ACK)
+            return
+
+        def done(result: Any, epoch: int) -> None:
+            if result is False:
+                self._reply(f, m.NAK, bytes((NakCode.REJECTED,)), epoch)
+            else:
+                hc.store(value)
+                self._reply(f, m.ACK, b"", epoch)
+        self._run(f, hc.on_write, (value,), done)
+
+    def _call(self, f: Frame, exp: Channel, hc: HubChannel) -> None:
+        arg = self._argument(f, exp, hc, hc.callable)
+        if arg is _REFUSED:
+            return
+        returns = hc.channel.returns
+        assert hc.fn is not None and returns is not None
+        args = () if hc.channel.codec.kind == "void" else (arg,)
+        self._run(f, hc.fn, args, lambda v, e: self._answer_value(f, hc, returns, v, e, ack_void=True))
+
+    def _argument(self, f: Frame, exp: Channel, hc: HubChannel, allowed: bool) -> Any:
+        """The checked value of a device C (PROTOCOL.md §5 order), or _REFUSED after a NAK."""
+        code = NakCode.NOT_WRITABLE if not allowed or not ("w" in exp.access or "c" in exp.access) else bind_status(exp, hc)
+        if code:
+            self._reply(f, m.NAK, bytes((code,)))
+            return _REFUSED
+        try:
+            return hc.channel.check(hc.channel.codec.decode(f.payload))
+        except InvalidValue as e:
+            self._reply(f, m.NAK, bytes((e.code,)))
+            return _REFUSED
+
+    def _answer_value(self, f: Frame, hc: HubChannel, codec: Any, value: Any, epoch: int, ack_void: bool = False) -> None:
+        if ack_void and codec.kind == "void":
+            self._reply(f, m.ACK, b"", epoch)
+            return
+        try:
+            payload = codec.encode(value)
+        except InvalidValue as e:
+            log.warning("hubwire: hub channel %s gave %s: %s", clip(hc.name), clip(repr(value), 60), clip(str(e), 120))
+            self._reply(f, m.NAK, bytes((NakCode.REJECTED,)), epoch)
+            return
+        h = self.core.link.device_hello
+        if h is not None and len(payload) > h.max_payload:
+            self._reply(f, m.NAK, bytes((NakCode.BAD_LENGTH,)), epoch)
+            return
+        self._reply(f, m.RESPONSE, payload, epoch)
+
+    def _run(self, f: Frame, fn: Callable[..., Any], args: Tuple[Any, ...], done: Callable[[Any, int], None]) -> None:
+        """Run an application handler where callbacks run; ``done(result, epoch)`` on the loop, or
+        NAK REJECTED when it raises."""
+        epoch, loop = self._epoch, self.loop
+
+        def finish(ok: bool, result: Any) -> None:
+            if ok:
+                done(result, epoch)
+            else:
+                log.warning("hubwire: hub channel handler %r raised: %s", fn, clip(repr(result), 160))
+                self._reply(f, m.NAK, bytes((NakCode.REJECTED,)), epoch)
+
+        def settle(fut: Any) -> None:
+            exc = fut.exception()
+            loop.call_soon_threadsafe(finish, exc is None, exc if exc is not None else fut.result())
+
+        def call() -> None:
+            try:
+                res = fn(*args)
+            except Exception as e:  # noqa: BLE001 - the device is told REJECTED
+                loop.call_soon_threadsafe(finish, False, e)
+                return
+            if asyncio.iscoroutine(res):
+                on_loop = _running_loop() is loop
+                task: Any = loop.create_task(res) if on_loop else asyncio.run_coroutine_threadsafe(res, loop)
+                task.add_done_callback(settle)
+                return
+            loop.call_soon_threadsafe(finish, True, res)
+        self.core.dispatch(call)
+
+
+_REFUSED = object()
+
+
+def _running_loop() -> Optional[asyncio.AbstractEventLoop]:
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
+
+
+def mismatch(exp: Channel, hc: Optional[HubChannel], code: int, device: str) -> str:
+    """Why hub channel ``exp`` of ``device`` is not bound, in words."""
+    want = {"r": "reads", "w": "writes", "c": "calls", "e": "receives events of"}
+    verbs = " and ".join(want[a] for a in exp.access if a in want)
+    if hc is None:
+        return f"{device} {verbs} hub channel {exp.name!r} ({exp.type_name}), which the hub does not declare"
+    if code == NakCode.BAD_LENGTH:
+        return (f"{device} {verbs} hub channel {exp.name!r} as {exp.type_name}, the hub declares it "
+                f"{hc.channel.type_name}")
+    return f"{device} {verbs} hub channel {exp.name!r}, the hub declares it {_access_words(hc)}"
+
+
+def _access_words(hc: HubChannel) -> str:
+    words: List[str] = []
+    for flag, word in ((hc.readable, "readable"), (hc.writable, "writable"), (hc.callable, "callable"),
+                       (hc.is_event, "an event")):
+        if flag:
+            words.append(word)
+    return " and ".join(words)
