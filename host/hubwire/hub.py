@@ -150,18 +150,20 @@ def bind_status(expected: Channel, hc: Optional[HubChannel]) -> int:
     """Status of a device's hub channel ``expected`` against the hub's ``hc`` (0 bound, else the NAK
     code of the bind report): UNKNOWN_CHANNEL, NOT_WRITABLE, NOT_READABLE, BAD_LENGTH (types differ)."""
     a = expected.access
-    if hc is None or ("e" in a) != hc.is_event:
-        return NakCode.UNKNOWN_CHANNEL if hc is None or "e" in a else NakCode.NOT_READABLE
+    if hc is None or ("e" in a and not hc.is_event):
+        return NakCode.UNKNOWN_CHANNEL
     if ("w" in a and not hc.writable) or ("c" in a and not hc.callable):
         return NakCode.NOT_WRITABLE
     if "r" in a and not hc.readable:
         return NakCode.NOT_READABLE
+    return 0 if _same(expected, hc) else NakCode.BAD_LENGTH
+
+
+def _same(expected: Channel, hc: HubChannel) -> bool:
+    """The same wire types (argument and return value for an action)."""
     mine = hc.channel
-    if expected.codec.type_obj != mine.codec.type_obj:
-        return NakCode.BAD_LENGTH
-    if "c" in a and (expected.returns and expected.returns.type_obj) != (mine.returns and mine.returns.type_obj):
-        return NakCode.BAD_LENGTH
-    return 0
+    ret = (expected.returns and expected.returns.type_obj) == (mine.returns and mine.returns.type_obj)
+    return expected.codec.type_obj == mine.codec.type_obj and ("c" not in expected.access or ret)
 
 
 class HubChannels:
