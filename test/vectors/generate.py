@@ -38,7 +38,8 @@ def _sibling(name: str) -> Any:
     return module
 
 
-session_rules = _sibling("session_rules")  # the session rules of PROTOCOL.md section 8
+session_rules = _sibling("session_rules")
+both_frames = _sibling("both_frames")  # issue 18: both directions (PROTOCOL.md 10)  # the session rules of PROTOCOL.md section 8
 
 # ---------------------------------------------------------------------------------------------- CRC
 
@@ -521,6 +522,7 @@ def main() -> int:
         "values.json": values,
         "values_invalid.json": invalid,
         "session/rules.json": session_rules.gen(),  # a folder of its own: the wire suites load *.json here
+        "both/frames.json": both_frames.gen(),  # likewise: frames of both directions, with a direction
     }
     changed = []
     for name, doc in files.items():
