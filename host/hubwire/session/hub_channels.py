@@ -138,7 +138,7 @@ class HubSide:
                 return  # an application's C is in flight: kicked again when it ends
             self._bind_wanted = False
             self.statuses = tuple(bind_status(exp, self.channels.get(exp.name)) for exp in desc.hub)
-            payload = bytes((BIND_REPORT_VERSION,) + self.statuses)
+            payload = m.BindReport(BIND_REPORT_VERSION, self.statuses).pack()
             h = core.link.device_hello
             if len(payload) > h.max_payload:
                 core.tx.release_control()
