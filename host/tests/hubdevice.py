@@ -3,16 +3,13 @@ report and events (deduplicated by seq and id, as PROTOCOL.md asks of a device) 
 send device-side R / C / J with the device's retry rule (same seq every 100 ms). Test helper only."""
 from __future__ import annotations
 
-import os
-import select
 import threading
-import time
-import tty
 from typing import Callable, Dict, List, Optional, Tuple
 
 from hubwire.cache import descriptor_digest
 from hubwire.wire import messages as m
-from hubwire.wire.frame import Frame, FrameDecoder, encode_frame
+from hubwire.testing.ptypeer import PtyPeer
+from hubwire.wire.frame import Frame
 
 HUB_LIST = (b'[{"id":1,"n":"setpoint","a":"r","t":"f32"},'
             b'{"id":2,"n":"report","a":"w","t":"struct","f":[{"n":"temp","t":"f32"},{"n":"heater","t":"bool"}]},'
@@ -23,15 +20,14 @@ DESCRIPTOR = (b'{"p":1,"n":"thermo","ch":[{"id":1,"n":"temp","a":"r","t":"f32"},
               b'"hub":' + HUB_LIST + b'}')
 
 
-class HubDevice:
+class HubDevice(PtyPeer):
     """Answers hellos, heartbeats (``since_ms`` = ``beat_ms``), chunk requests, the bind report and
     hub events; ``ask()`` runs one device transaction."""
 
     def __init__(self, descriptor: bytes = DESCRIPTOR, *, beat_ms: int = 240, max_payload: int = 32,
                  ack_event: Optional[Callable[[int, int], bool]] = None) -> None:
+        super().__init__(max_payload, beat_ms)
         self.descriptor = descriptor
-        self.beat_ms = beat_ms
-        self.max_payload = max_payload
         #: ack_event(seq, nth) False: the device "loses" its ACK of that event (the hub retries)
         self.ack_event = ack_event or (lambda seq, nth: True)
         self.binds: List[bytes] = []
@@ -48,26 +44,6 @@ class HubDevice:
         self._seq = 0x40
         self._waiting: Dict[Tuple[int, int], "threading.Event"] = {}
         self._answers: Dict[Tuple[int, int], Frame] = {}
-        self.lock = threading.Lock()
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)
-        self.path = os.ttyname(self.slave)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def __enter__(self) -> "HubDevice":
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join(2)
-        os.close(self.master)
-        os.close(self.slave)
-
-    def send(self, t: int, seq: int, cid: int, payload: bytes = b"") -> None:
-        with self.lock:
-            os.write(self.master, encode_frame(t, seq, cid, payload))
 
     def _hello(self, reply: bool) -> None:
         h = m.Hello(1, m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0), 0x1234567, self.max_payload, 250,
@@ -94,27 +70,7 @@ class HubDevice:
         self._waiting.pop(key, None)
         return None
 
-    def _run(self) -> None:
-        dec = FrameDecoder(self.max_payload)
-        linked = False
-        beat = 0.0
-        n = 0
-        while not self._stop.is_set():
-            r, _, _ = select.select([self.master], [], [], 0.02)
-            if r:
-                try:
-                    data = os.read(self.master, 512)
-                except OSError:
-                    return
-                for f in dec.feed(data):
-                    self._handle(f)
-                    linked = linked or f.type == m.HELLO
-            if linked and time.monotonic() - beat > 0.25:
-                beat = time.monotonic()
-                n += 1
-                self.send(m.HEARTBEAT, n & 0xFF, 0, m.Heartbeat(n, self.beat_ms if n > 1 else 0, 0, 0, 0).pack())
-
-    def _handle(self, f: Frame) -> None:
+    def handle(self, f: Frame) -> None:
         if f.type == m.HELLO:
             h = m.Hello.unpack(f.payload)
             if self.hub_hello is None or h.nonce != self.hub_hello.nonce:
