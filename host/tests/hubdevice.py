@@ -42,13 +42,20 @@ class HubDevice(PtyPeer):
         self._last_event: Optional[Tuple[int, int]] = None
         self.hub_hello: Optional[m.Hello] = None
         self._seq = 0x40
+        self.nonce = 0x1234567
         self._waiting: Dict[Tuple[int, int], "threading.Event"] = {}
         self._answers: Dict[Tuple[int, int], Frame] = {}
 
     def _hello(self, reply: bool) -> None:
-        h = m.Hello(1, m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0), 0x1234567, self.max_payload, 250,
+        h = m.Hello(1, m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0), self.nonce, self.max_payload, 250,
                     m.fnv1a32(self.descriptor), len(self.descriptor), digest=descriptor_digest(self.descriptor))
         self.send(m.HELLO, 0, 0, h.pack())
+
+    def reboot(self) -> None:
+        """A new boot: a new nonce, duplicate detection forgotten, announced with a hello."""
+        self.nonce += 1
+        self._last_event = None
+        self._hello(False)
 
     def ask(self, t: int, hub_id: int, payload: bytes = b"", *, tries: int = 20, retry: float = 0.1,
             lose: int = 0, seq: Optional[int] = None) -> Optional[Frame]:

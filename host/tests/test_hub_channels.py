@@ -290,6 +290,44 @@ def test_events_exactly_once_in_order_with_lost_acks() -> None:
         assert d.session.stats.hub_event_retries >= 10
 
 
+def test_events_ride_through_link_loss_and_reboot() -> None:
+    lost = threading.Event()
+    with HubDevice() as dev, connect(dev, hub=full_hub([]), on_link_lost=lost.set) as d:
+        assert wait_for(lambda: len(dev.binds) == 1)
+        d.notify("mode", 1)
+        assert wait_for(lambda: dev.events == [(4, b"\x01")])
+        dev.mute = True                       # the line is cut: the hub declares the link lost
+        for i in (2, 3, 4):
+            d.notify("mode", i)
+        assert lost.wait(5) and d.notifications_pending == 3
+        dev.mute = False                      # back: the link is restored, the queue drains in order
+        assert wait_for(lambda: d.notifications_pending == 0)
+        assert dev.events == [(4, bytes((i,))) for i in (1, 2, 3, 4)]
+        binds = len(dev.binds)
+        dev.mute = True
+        d.notify("mode", 5)
+        time.sleep(0.3)
+        dev.mute = False
+        dev.reboot()                          # a new device session: bound again, then delivered
+        assert wait_for(lambda: d.notifications_pending == 0)
+        assert dev.events[-1] == (4, b"\x05") and len(dev.events) == 5
+        assert len(dev.binds) > binds and d.session.stats.reboots == 1
+
+
+def test_device_write_memory_is_per_device_session() -> None:
+    calls: List[int] = []
+    with HubDevice() as dev, connect(dev) as d:
+        d.accept("target", calls.append, type="i16")
+        assert wait_for(lambda: dev.binds and dev.binds[-1][5] == 0)
+        seq = dev._seq + 1
+        assert dev.ask(m.CONTROL, 5, struct.pack("<h", 1), seq=seq).type == m.ACK  # type: ignore[union-attr]
+        n = len(dev.binds)
+        dev.reboot()
+        assert wait_for(lambda: len(dev.binds) > n)  # rediscovered (from memory) and bound again
+        assert dev.ask(m.CONTROL, 5, struct.pack("<h", 1), seq=seq).type == m.ACK  # type: ignore[union-attr]
+        assert calls == [1, 1]  # the same seq and id from the new boot is a new write
+
+
 def test_events_wait_for_the_bind_report_and_are_checked() -> None:
     hub = HubChannels()
     hub.event("mode", type="u8")

@@ -23,6 +23,8 @@ class PtyPeer:
         self.max_payload = max_payload
         self.beat_ms = beat_ms
         self.linked = False
+        #: a cut line: nothing is sent, everything received is lost
+        self.mute = False
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
         self.path = os.ttyname(self.slave)
@@ -48,6 +50,8 @@ class PtyPeer:
         self.close()
 
     def send(self, t: int, seq: int, cid: int, payload: bytes = b"") -> None:
+        if self.mute:
+            return
         with self.lock:
             try:
                 os.write(self.master, encode_frame(t, seq, cid, payload))
@@ -67,7 +71,7 @@ class PtyPeer:
                     data = os.read(self.master, 512)
                 except OSError:
                     return
-                for f in dec.feed(data):
+                for f in dec.feed(data) if not self.mute else ():
                     self.linked = self.linked or f.type == m.HELLO
                     self.handle(f)
             if self.linked and time.monotonic() - beat >= 0.25:
