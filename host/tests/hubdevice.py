@@ -35,6 +35,8 @@ class HubDevice(PtyPeer):
         self.controls: List[Tuple[int, int]] = []
         #: answer the hub's writes of "level" (False: silence, the hub retries and times out)
         self.answer_controls = True
+        #: acknowledge the bind report (False: a deaf device, the hub retries and gives way)
+        self.answer_binds = True
         #: (hub id, payload) of every event delivered to the sketch, in order
         self.events: List[Tuple[int, bytes]] = []
         self.event_frames = 0
@@ -94,7 +96,8 @@ class HubDevice(PtyPeer):
             self.controls.append((f.seq, f.id))
             if f.id == 0:
                 self.binds.append(bytes(f.payload))
-                self.send(m.ACK, f.seq, 0)
+                if self.answer_binds:
+                    self.send(m.ACK, f.seq, 0)
             elif self.answer_controls:
                 self.send(m.ACK, f.seq, f.id)
         elif f.type == m.EVENT:

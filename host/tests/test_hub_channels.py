@@ -153,6 +153,20 @@ def test_bind_report_never_overlaps_an_application_write() -> None:
         assert all(cid == 2 for _, cid in dev.controls[writes[0]:writes[-1] + 1])
 
 
+def test_an_unanswered_bind_report_gives_way_to_application_writes() -> None:
+    with HubDevice() as dev:
+        dev.answer_binds = False
+        with connect(dev, tries=3) as d:
+            assert wait_for(lambda: len(dev.binds) >= 3)  # sent, retried with the same seq ...
+            d.write("level", 7)                           # ... then the write gets its turn
+            first = next(i for i, (_, cid) in enumerate(dev.controls) if cid == 2)
+            before = dev.controls[:first]               # 3 sends of one bind report, nothing else
+            assert len(before) == 3 and {cid for _, cid in before} == {0} and len({s for s, _ in before}) == 1
+            n = len(dev.binds)
+            assert wait_for(lambda: len(dev.binds) > n)   # and the report is tried again later
+            assert d.notifications_pending == 0 and d.session.stats.hub_events_delivered == 0
+
+
 def test_missing_name_raises_at_connect() -> None:
     log: List[Any] = []
     hub = full_hub(log)

@@ -39,6 +39,8 @@ log = logging.getLogger("hubwire")
 HUB_EVENT_QUEUE_LIMIT = 4096
 #: first byte of the bind report's payload
 BIND_REPORT_VERSION = 1
+#: seconds before a bind report nobody answered is sent again (meanwhile application writes may go)
+BIND_PAUSE = 0.5
 
 
 class _Queued:
@@ -66,6 +68,8 @@ class HubSide:
         #: the statuses of the last bind report sent (hub id k at index k-1)
         self.statuses: Tuple[int, ...] = ()
         self._bind: Optional[Tuple[int, bytes]] = None  # (seq, payload) outstanding
+        self._bind_sends = 0
+        self._bind_later: Optional[asyncio.TimerHandle] = None
         self._bind_wanted = False
         self._head_out = False  # the head event is sent and unanswered
         self._timer: Optional[asyncio.TimerHandle] = None
@@ -104,6 +108,8 @@ class HubSide:
 
     def close(self) -> None:
         self.channels.remove_listener(self)
+        if self._bind_later is not None:
+            self._bind_later.cancel()
         self.link_down()
 
     # ------------------------------------------------------------------------- the pump
@@ -144,7 +150,7 @@ class HubSide:
                 core.tx.release_control()
                 log.error("hubwire: %d hub channels do not fit the bind report %s accepts", len(desc.hub), desc.name)
                 return
-            self._bind = (core.tx.next_seq(), payload)
+            self._bind, self._bind_sends = (core.tx.next_seq(), payload), 0
             core.stats.binds_sent += 1
             failed = [f"{exp.name}: {m.nak_name(s)}" for exp, s in zip(desc.hub, self.statuses) if s]
             if failed:
@@ -158,7 +164,20 @@ class HubSide:
     def _send_bind(self) -> None:
         assert self._bind is not None
         seq, payload = self._bind
+        self._bind_sends += 1
         self.core.link.send_frame(m.CONTROL, seq, 0, payload)
+
+    def _bind_unanswered(self) -> None:
+        """``tries`` sends without an answer: give the application's writes their turn and try again
+        a little later (the device may be busy or deaf; the report never blocks the link for long)."""
+        self._bind = None
+        self.core.tx.release_control()
+        if self._bind_later is None:
+            self._bind_later = self.loop.call_later(BIND_PAUSE, self._bind_again)
+
+    def _bind_again(self) -> None:
+        self._bind_later = None
+        self.rebind()
 
     def _send_head(self, desc: Descriptor) -> None:
         while self.queue:
@@ -185,8 +204,11 @@ class HubSide:
         if not self.core.link.linked:
             return
         if self._bind is not None:
-            self.core.stats.bind_retries += 1
-            self._send_bind()
+            if self._bind_sends >= self.core.tries:
+                self._bind_unanswered()
+            else:
+                self.core.stats.bind_retries += 1
+                self._send_bind()
         if self._head_out and self.queue:
             self.core.stats.hub_event_retries += 1
             ev = self.queue[0]
@@ -237,6 +259,9 @@ class HubSide:
             if exp is None or "e" not in exp.access:
                 raise HubChannelError(f"{desc.name} takes no hub event {name!r}")
         payload = hc.channel.codec.encode(hc.channel.check(value))
+        h = self.core.link.device_hello
+        if h is not None and len(payload) > h.max_payload:
+            raise HubChannelError(f"event {name!r} is {len(payload)} bytes, the device accepts {h.max_payload}")
         with self._lock:
             if len(self.queue) >= HUB_EVENT_QUEUE_LIMIT:
                 raise HubwireError(f"{HUB_EVENT_QUEUE_LIMIT} hub events wait for the device already")

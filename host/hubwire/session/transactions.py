@@ -175,7 +175,7 @@ class Transactions:
         """Give the right back; wakes whoever waits for it (the hub's bind report, callers)."""
         with self.lock:
             owner, self.control_owner = self.control_owner, None
-        if owner == "user":
+        if owner == "user" and not self.loop.is_closed():
             self.loop.call_soon_threadsafe(self.core.hub.kick)
         elif owner == "hub":
             self.core.wake()
