@@ -52,10 +52,10 @@ def _fmt_num(x: Any) -> str:
 ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
 
 
-def channel_table(desc: Descriptor) -> str:
-    """The channel table of a descriptor as text."""
+def channel_table(desc: Descriptor, hub: bool = False) -> str:
+    """The channel table of a descriptor as text (``hub``: of the hub channels the device uses)."""
     rows = [("id", "name", "type", "access", "unit", "range", "failsafe", "description")]
-    for c in desc.channels:
+    for c in desc.hub if hub else desc.channels:
         rng = ""
         if c.min is not None or c.max is not None:
             rng = f"{_fmt_num(c.min) or '*'}..{_fmt_num(c.max) or '*'}"

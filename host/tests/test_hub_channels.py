@@ -389,3 +389,23 @@ def test_aio_coroutine_action() -> None:
                 r = await loop.run_in_executor(None, dev.ask, m.REQUEST, 1)
                 assert r is not None and r.payload == f32(4.0)
     asyncio.run(main())
+
+
+def test_info_lists_the_hub_channels_the_device_uses(tmp_path: Any) -> None:
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, HUBWIRE_CACHE_DIR=str(tmp_path))
+    with HubDevice() as dev:
+        out = subprocess.run([sys.executable, "-m", "hubwire", "info", dev.path, "--json"], capture_output=True,
+                             text=True, env=env, timeout=60)
+        assert out.returncode == 0, out.stderr
+        hub = json.loads(out.stdout)["hub"]
+        assert [(c["id"], c["name"], c["access"], c["type"]) for c in hub][:3] == [
+            (1, "setpoint", "r", "f32"), (2, "report", "w", "struct{temp: f32, heater: bool}"), (3, "dock", "c", "(f32) -> bool")]
+        text = subprocess.run([sys.executable, "-m", "hubwire", "info", dev.path], capture_output=True, text=True,
+                              env=env, timeout=60).stdout
+        table = text.split("hub channels thermo uses")[1]
+        assert "mode" in table and "event" in table and "temp" not in table.split("struct")[0]
