@@ -4,7 +4,12 @@ send device-side R / C / J with the device's retry rule (same seq every 100 ms).
 from __future__ import annotations
 
 import threading
-from typing import Callable, Dict, List, Optional, Tuple
+import struct
+import time
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+import hubwire
+from hubwire import HubChannels
 
 from hubwire.cache import descriptor_digest
 from hubwire.wire import messages as m
@@ -115,3 +120,38 @@ class HubDevice(PtyPeer):
             if ev is not None:
                 self._answers[key] = f
                 ev.set()
+
+
+def wait_for(pred: Callable[[], bool], timeout: float = 5.0) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if pred():
+            return True
+        time.sleep(0.01)
+    return pred()
+
+
+def full_hub(log: List[Any]) -> HubChannels:
+    hub = HubChannels("home")
+    hub.provide("setpoint", 21.5, unit="C")
+
+    @hub.accept("report", type="struct", fields={"temp": "f32", "heater": "bool"})
+    def report(v: Any) -> None:
+        log.append(("report", v.temp, v.heater))
+
+    @hub.action("dock")
+    def dock(speed: float) -> bool:
+        log.append(("dock", speed))
+        return speed > 0
+
+    hub.event("mode", type="u8")
+    hub.accept("target", type="i16", min=-100, max=100)
+    return hub
+
+
+def f32(x: float) -> bytes:
+    return struct.pack("<f", x)
+
+
+def connect(dev: HubDevice, **kw: Any) -> hubwire.Device:
+    return hubwire.connect(dev.path, timeout=5, cache_dir=False, **kw)

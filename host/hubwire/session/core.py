@@ -235,7 +235,7 @@ class SessionCore:
     def handle(self, f: Frame, now: float) -> None:
         t = f.type
         if t in _DEVICE_TRANSACTIONS or (t == m.CHUNK and len(f.payload) == 3):
-            self.hub.on_device_frame(f)  # the device asks the hub (a chunk request has 3 bytes)
+            self.hub.answers.on_device_frame(f)  # the device asks the hub (a chunk request has 3 bytes)
         elif t in _ANSWERS:
             if t in _ACKS and self.hub.on_answer(f):
                 return
