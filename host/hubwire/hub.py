@@ -217,7 +217,7 @@ class HubChannels:
         return declare(on_write)
 
     def action(self, name: str, fn: Optional[Callable[..., Any]] = None, *, type: TypeSpec = None,
-               returns: TypeSpec = None, doc: Optional[str] = None, void: bool = False) -> Any:
+               returns: TypeSpec = None, doc: Optional[str] = None) -> Any:
         """An action the device may call with one argument and a return value; the argument and
         return types come from ``type=`` / ``returns=`` or from ``fn``'s annotations (no parameter:
         no argument; ``-> None`` or no return annotation: nothing returned). Decorator or direct."""

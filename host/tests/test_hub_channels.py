@@ -39,6 +39,16 @@ def test_types_come_from_values_and_annotations() -> None:
         hub.action("f", f)
     assert "f" not in hub
     assert hub.action("f", f, type="str[12]").channel.type_name == "(str[12]) -> f32"
+    seen: List[float] = []
+
+    @hub.accept("i")
+    def on_i(value: float) -> None:  # the type from the handler's annotation
+        seen.append(value)
+    assert hub["i"].channel.type_name == "f32" and hub["i"].on_write is on_i and hub["i"].access == "w"
+    hub.accept("j", type="u8", min=1, max=9)(seen.append)  # declared, then a handler given
+    assert hub["j"].on_write == seen.append and hub["j"].channel.range == (1, 9)
+    with pytest.raises(hubwire.InvalidValue, match="outside"):
+        hub.provide("k", 12, type="u8", max=10)
     with pytest.raises(HubChannelError, match="unknown type 'u9'"):
         hub.provide("g", 1, type="u9")
     with pytest.raises(HubChannelError, match="type="):
