@@ -44,8 +44,6 @@ __all__ = ["HubChannels", "HubChannel", "TypeSpec", "bind_status"]
 TypeSpec = Union[str, type, None, Mapping[str, Any]]
 _PY_TYPES: Dict[Any, str] = {float: "f32", int: "i32", bool: "bool", type(None): "void"}
 _ARRAY = re.compile(r"\s*(\w+)\s*\[\s*(\d+)\s*\]\s*\Z")
-#: access letters of a hub channel as the device sees it
-_ACCESS_ORDER = "rwce"
 
 
 def _type_obj(spec: TypeSpec, fields: Any = None, where: str = "") -> Dict[str, Any]:
@@ -76,6 +74,7 @@ def _hint(fn: Callable[..., Any], key: Optional[str]) -> Any:
         return inspect_missing
 
 
+#: no usable annotation
 inspect_missing = object()
 
 
