@@ -83,6 +83,8 @@ def test_events_wait_for_the_bind_report_and_are_checked() -> None:
         d.notify("mode", 3)
         assert wait_for(lambda: dev.events == [(4, b"\x03")])
         assert dev.binds and dev.binds[-1][4] == 0
+    with pytest.raises(hubwire.HubwireError, match="closed"):
+        d.notify("mode", 4)
 
 
 # ---------------------------------------------------------------------------------- health

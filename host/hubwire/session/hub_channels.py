@@ -243,6 +243,8 @@ class HubSide:
     def notify(self, name: str, value: Any) -> None:
         """Queue event ``name`` for the device (any thread); raises at once for a name that is not a
         hub event, a value that does not fit, or a device that takes no such event."""
+        if self.core.closed:
+            raise HubwireError("the session is closed: no event can reach the device any more")
         hc = self.channels[name]
         if not hc.is_event:
             raise HubChannelError(f"hub channel {name!r} is not an event (declare it with hub.event())")
