@@ -42,6 +42,10 @@ class HubDevice(PtyPeer):
         self.answer_controls = True
         #: acknowledge the bind report (False: a deaf device, the hub retries and gives way)
         self.answer_binds = True
+        #: answer this many bind reports and events with NAK NOT_LINKED first (the device dropped
+        #: the link on its side), then link again on the hub's hello
+        self.not_linked = 0
+        self.hellos = 0
         #: (hub id, payload) of every event delivered to the sketch, in order
         self.events: List[Tuple[int, bytes]] = []
         self.event_frames = 0
@@ -85,7 +89,12 @@ class HubDevice(PtyPeer):
         return None
 
     def handle(self, f: Frame) -> None:
+        if self.not_linked and f.type in (m.CONTROL, m.EVENT):
+            self.not_linked -= 1
+            self.send(m.NAK, f.seq, f.id, bytes((m.NakCode.NOT_LINKED,)))
+            return
         if f.type == m.HELLO:
+            self.hellos += 1
             h = m.Hello.unpack(f.payload)
             if self.hub_hello is None or h.nonce != self.hub_hello.nonce:
                 self._last_event = None  # a new hub session: forget duplicate detection

@@ -68,6 +68,26 @@ def test_device_write_memory_is_per_device_session() -> None:
         assert calls == [1, 1]  # the same seq and id from the new boot is a new write
 
 
+def test_not_linked_nak_keeps_the_event_and_relinks() -> None:
+    with HubDevice() as dev, connect(dev, hub=full_hub([])) as d:
+        assert wait_for(lambda: len(dev.binds) == 1)
+        dev.not_linked = 1      # the next event is answered NOT_LINKED: it must not count as delivered
+        hellos = dev.hellos
+        d.notify("mode", 9)
+        assert wait_for(lambda: dev.events == [(4, b"\x09")])
+        assert dev.hellos > hellos and d.session.stats.not_linked == 1
+        assert d.session.stats.hub_events_refused == 0 and d.session.stats.hub_events_delivered == 1
+
+
+def test_not_linked_bind_report_is_sent_again() -> None:
+    with HubDevice() as dev:
+        dev.not_linked = 1      # the first bind report meets a device that dropped the link
+        with connect(dev, hub=full_hub([])) as d:
+            assert wait_for(lambda: len(dev.binds) == 1 and dev.hellos >= 2)
+            d.notify("mode", 1)
+            assert wait_for(lambda: dev.events == [(4, b"\x01")])
+
+
 def test_events_wait_for_the_bind_report_and_are_checked() -> None:
     hub = HubChannels()
     hub.event("mode", type="u8")

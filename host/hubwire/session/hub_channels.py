@@ -210,27 +210,50 @@ class HubSide:
 
     def on_answer(self, f: Frame) -> bool:
         """An ACK/NAK of the bind report or of the head event; False if it answers neither."""
+        code = f.payload[0] if f.type == m.NAK and f.payload else 0
         if self._bind is not None and f.id == 0 and f.seq == self._bind[0]:
             self._bind = None
             self.core.tx.release_control()
             if f.type == m.ACK:
                 self.bound_key = self._key()
+            elif code == NakCode.NOT_LINKED:
+                self._relink()
+                self._bind_wanted = True  # sent again (a new seq) a retry interval later
+                self._kick_in_a_while()
+                return True
             else:
-                log.warning("hubwire: device refused the bind report: %s", m.nak_name(f.payload[0] if f.payload else 0))
+                log.warning("hubwire: device refused the bind report: %s", m.nak_name(code))
             self._kick_later()
             return True
         if self._head_out and self.queue and f.seq == self.queue[0].seq and f.id == self.queue[0].id:
-            ev = self.queue.popleft()
             self._head_out = False
+            if code == NakCode.NOT_LINKED:
+                self._relink()  # not delivered: the head stays, sent again with its seq
+                self._kick_in_a_while()
+                return True
+            ev = self.queue.popleft()
             if f.type == m.ACK:
                 self.core.stats.hub_events_delivered += 1
             else:
                 self.core.stats.hub_events_refused += 1
-                log.warning("hubwire: device refused event %s: %s", clip(ev.name),
-                            m.nak_name(f.payload[0] if f.payload else 0))
+                log.warning("hubwire: device refused event %s: %s", clip(ev.name), m.nak_name(code))
             self._kick_later()
             return True
         return False
+
+    def _relink(self) -> None:
+        """The device lost the link on its side: say hello (its answer links it again)."""
+        self.core.stats.not_linked += 1
+        self.core.link.send_hello(reply=False)
+
+    def _kick_in_a_while(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = self.loop.call_later(self.core.retry_timeout, self._retry_kick)
+
+    def _retry_kick(self) -> None:
+        self._timer = None
+        self.kick()
 
     def _kick_later(self) -> None:
         if self._timer is not None:
