@@ -40,7 +40,6 @@ class HubAnswers:
         self._last_answer: Optional[Tuple[int, bytes]] = None  # None while its handler runs
         self._epoch = 0
 
-
     def on_device_frame(self, f: Frame) -> None:
         """A device ``R``, ``C`` or ``J`` (request)."""
         core = self.core
