@@ -61,6 +61,27 @@
 #define HUBWIRE_LOST_AFTER_BEATS 4
 #endif
 
+// Talking to the hub's own channels (remote(), remoteAction(), remoteEvent()): only a sketch that
+// declares one pays for any of this (session/hub_link.h).
+// The most hub channels a sketch declares (the bind report carries one status byte each).
+#ifndef HUBWIRE_MAX_HUB_CHANNELS
+#define HUBWIRE_MAX_HUB_CHANNELS 8
+#endif
+// Requests, writes and calls waiting for the hub, and the largest value one carries (bytes): a
+// written value or an action's argument is copied when queued.
+#ifndef HUBWIRE_HUB_QUEUE
+#define HUBWIRE_HUB_QUEUE 4
+#endif
+#ifndef HUBWIRE_HUB_MAX_VALUE
+#define HUBWIRE_HUB_MAX_VALUE 8
+#endif
+// A request unanswered for this long is sent again (same seq), up to this many tries in all.
+#ifndef HUBWIRE_HUB_RETRY_MS
+#define HUBWIRE_HUB_RETRY_MS 100
+#endif
+#ifndef HUBWIRE_HUB_TRIES
+#define HUBWIRE_HUB_TRIES 5
+#endif
 
 // Keeps a small function called from many places out of line, where GCC's inlining would repeat it.
 #if defined(__GNUC__)
@@ -93,6 +114,15 @@ static_assert(HUBWIRE_ANNOUNCE_MS >= 10 && HUBWIRE_ANNOUNCE_MS <= 60000, "HUBWIR
 static_assert(HUBWIRE_MIN_STREAM_INTERVAL_MS >= 1 && HUBWIRE_MIN_STREAM_INTERVAL_MS <= 60000,
               "HUBWIRE_MIN_STREAM_INTERVAL_MS must be 1..60000 (the longest interval granted)");
 static_assert(HUBWIRE_EVENT_RETRY_MS >= 10 && HUBWIRE_EVENT_RETRY_MS <= 60000, "HUBWIRE_EVENT_RETRY_MS must be 10..60000");
+static_assert(HUBWIRE_MAX_HUB_CHANNELS >= 1 && HUBWIRE_MAX_HUB_CHANNELS <= 254 &&
+                  HUBWIRE_MAX_HUB_CHANNELS + 1 <= HUBWIRE_MAX_PAYLOAD,
+              "HUBWIRE_MAX_HUB_CHANNELS must be 1..254 and below HUBWIRE_MAX_PAYLOAD (the bind report)");
+static_assert(HUBWIRE_HUB_QUEUE >= 1 && HUBWIRE_HUB_QUEUE <= 32, "HUBWIRE_HUB_QUEUE must be 1..32");
+static_assert(HUBWIRE_HUB_MAX_VALUE >= 3 && HUBWIRE_HUB_MAX_VALUE <= HUBWIRE_MAX_PAYLOAD,
+              "HUBWIRE_HUB_MAX_VALUE must be 3..HUBWIRE_MAX_PAYLOAD");
+static_assert(HUBWIRE_HUB_RETRY_MS >= 10 && HUBWIRE_HUB_TRIES >= 1 && HUBWIRE_HUB_TRIES <= 255 &&
+                  (long)HUBWIRE_HUB_RETRY_MS * HUBWIRE_HUB_TRIES <= 65535L,
+              "HUBWIRE_HUB_RETRY_MS x HUBWIRE_HUB_TRIES must be at most 65535 ms (RETRY_MS >= 10, TRIES 1..255)");
 }  // namespace hubwire
 
 #endif

@@ -23,6 +23,19 @@ struct Event {
   uint8_t id;  // set by begin()
 };
 
+// An action of the hub the sketch calls (remoteAction(), Session::call()), by its signature:
+//   hubwire::RemoteAction<bool(float)> dock;   // takes a float, returns a bool
+template <typename Signature>
+struct RemoteAction;
+template <typename R, typename A>
+struct RemoteAction<R(A)> {
+  uint8_t unused;  // a handle: only its address counts
+};
+template <typename R>
+struct RemoteAction<R()> {
+  uint8_t unused;
+};
+
 // Calls the function a control or action declared, with a typed argument and return value, both as
 // little-endian bytes. call points to that function's pointer, kept in flash with its own type.
 // Returns false when the function refused the value (controls returning bool).

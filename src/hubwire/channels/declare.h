@@ -11,18 +11,40 @@
 #ifndef HUBWIRE_CHANNELS_DECLARE_H
 #define HUBWIRE_CHANNELS_DECLARE_H
 
-// One job a header: the declarations a sketch writes (dsl.h), the JSON they become (json.h; a
-// struct's layout: layout.h), and the flash tables with their checks (tables.h).
+// One job a header: the declarations a sketch writes (dsl.h; what it expects of the hub: remote.h),
+// the JSON they become (json.h; a struct's layout: layout.h), the flash tables with their checks
+// (tables.h) and the hub channels' table (hub_table.h).
 #include "dsl.h"
+#include "remote.h"
 #include "tables.h"
+#include "hub_table.h"
 
 /// Declares a sketch's channels at file scope; `var` is then what begin() takes. After the device:
-/// expose(), control(), action() and event() (dsl.h), with their options.
+/// expose(), control(), action() and event() (dsl.h), with their options, and what the sketch
+/// expects of the hub: remote(), remoteAction() and remoteEvent() (remote.h).
 ///   HUBWIRE_CHANNELS(channels, "minimal", expose("blink_ms", blinkMs).writable(), event("button", button));
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
   constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
+  typedef decltype(declared) Decls;                                                                \
+  namespace {                                                                                      \
+  struct Tag {};                                                                                   \
+  }                                                                                                \
+  }                                                                                                \
+  template <>                                                                                      \
+  const ::hubwire::HubTable* const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),    \
+      ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
+                      hubwire_channels_##var::Tag>::type>::table =                                 \
+      ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
+                                     &hubwire_channels_##var::declared>::get();                    \
+  template <>                                                                                      \
+  bool ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                                \
+      ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
+                      hubwire_channels_##var::Tag>::type>::dispatch(::hubwire::Session& s,         \
+                                                                    bool frame) { \
+    return ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                           \
+                                          &hubwire_channels_##var::declared>::dispatch(s, frame); \
   }                                                                                                \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>()

@@ -37,7 +37,8 @@ struct IsNumeric<StructValue> {
   static const bool value = false;
 };
 
-enum Kind : uint8_t { kVariable, kControl, kAction, kEvent };
+// kRemote...: what the sketch expects of the hub (remote.h), listed under "hub" in the descriptor.
+enum Kind : uint8_t { kVariable, kControl, kAction, kEvent, kRemote, kRemoteAction, kRemoteEvent };
 
 // Set while declaring when a range or failsafe value changes on its way into the channel's type
 // (300 for a uint8_t, -1.5 for an int16_t); Checked<> turns it into a compile error.
@@ -93,11 +94,15 @@ const uint8_t kPiecesPerChannel = 13;
 // cast it to a common type) and copied to flash, where its thunk reads it.
 template <typename T, Kind K, typename Call = void (*)()>
 class Decl {
+  template <typename, Kind, typename>
+  friend class Decl;
+
  public:
   /// Readable and writable by the hub; writes it sends are stored in the variable.
   ///   expose("speed", speed).writable()
   constexpr Decl writable() const {
-    static_assert(K == kVariable, "writable(): only a variable declared with expose() can be written by the hub");
+    static_assert(K == kVariable || K == kRemote,
+                  "writable(): only a variable declared with expose() or remote() can be written");
     return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, call_);
   }
   /// The hub may subscribe to samples of it at an interval.
@@ -142,11 +147,24 @@ class Decl {
   /// Called after the hub wrote a new value into the variable (kept where a control's function is).
   ///   expose("led", led).writable().onChange(ledChanged)
   constexpr Decl onChange(void (*fn)()) const {
-    static_assert(K == kVariable, "onChange(): only a variable declared with expose() has one (a control calls its function)");
+    static_assert(K == kVariable || K == kRemoteEvent,
+                  "onChange(): only a variable declared with expose() or remoteEvent() has one (a control calls its function)");
     return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kOnChangeGiven), lo_, hi_, failsafe_, fn);
   }
 
+  /// A hub value the sketch only writes (never requests).
+  ///   remote("report", report).writeOnly()
+  constexpr Decl writeOnly() const {
+    static_assert(K == kRemote, "writeOnly(): only a hub value declared with remote()");
+    return Decl(*this, unit_, description_, kWritable, flags_, lo_, hi_, failsafe_, call_);
+  }
+
   // Everything below is for HUBWIRE_CHANNELS.
+  // The same declaration as another kind (remote.h: remote() is expose() for the hub's side).
+  template <Kind K2>
+  constexpr Decl<T, K2, Call> as(uint8_t access) const {
+    return Decl<T, K2, Call>(name_, layout_, data_, code_, count_, ret_, access, call_, thunk_, memSize_);
+  }
   constexpr Decl(const char* name, const char* layout, void* data, TypeCode code, uint8_t count,
                  TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0)
       : memSize_(memSize), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data),
@@ -323,21 +341,56 @@ struct List<H, R...> {
   H head;
   List<R...> tail;
 };
-template <typename L>
+template <typename L, typename HL = List<> >
 struct Declared {
   static constexpr uint8_t size() { return L::size; }
+  static constexpr uint8_t hubSize() { return HL::size; }
   DeviceName dev;
-  L list;
+  L list;   // the device's channels
+  HL hub;   // what it expects of the hub (remote.h), in declaration order
 };
-constexpr List<> listOf() { return List<>{}; }
-template <typename H, typename... R>
-constexpr List<H, R...> listOf(H h, R... r) {
-  return List<H, R...>{h, listOf(r...)};
-}
+
+// The declarations of one side, in order: Pick<false, D...> the device's channels, Pick<true, D...>
+// the hub channels (remote(), remoteAction(), remoteEvent()).
+template <typename D>
+struct IsRemote {
+  static const bool value = false;
+};
+template <typename T, Kind K, typename C>
+struct IsRemote<Decl<T, K, C> > {
+  static const bool value = K >= kRemote;
+};
+template <bool Keep, typename H, typename L>
+struct Prepend {
+  typedef L type;
+  static constexpr type make(const H&, const L& l) { return l; }
+};
+template <typename H, typename... X>
+struct Prepend<true, H, List<X...> > {
+  typedef List<H, X...> type;
+  static constexpr type make(const H& h, const List<X...>& l) { return type{h, l}; }
+};
+template <bool Remote, typename... D>
+struct Pick {
+  typedef List<> type;
+  static constexpr type make() { return type{}; }
+};
+template <bool Remote, typename H, typename... R>
+struct Pick<Remote, H, R...> {
+  typedef Pick<Remote, R...> Rest;
+  typedef Prepend<IsRemote<H>::value == Remote, H, typename Rest::type> Add;
+  typedef typename Add::type type;
+  static constexpr type make(const H& h, const R&... r) { return Add::make(h, Rest::make(r...)); }
+};
+
 template <typename... D>
-constexpr Declared<List<D...> > declared(DeviceName dev, D... d) {
-  static_assert(sizeof...(D) <= HUBWIRE_MAX_CHANNELS, "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
-  return Declared<List<D...> >{dev, listOf(d...)};
+constexpr Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type> declared(DeviceName dev, D... d) {
+  static_assert(Pick<false, D...>::type::size <= HUBWIRE_MAX_CHANNELS,
+                "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
+  static_assert(Pick<true, D...>::type::size <= HUBWIRE_MAX_HUB_CHANNELS,
+                "more hub channels than HUBWIRE_MAX_HUB_CHANNELS: raise it");
+  return Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type>{
+      dev, Pick<false, D...>::make(d...), Pick<true, D...>::make(d...)};
 }
 
 }  // namespace declare

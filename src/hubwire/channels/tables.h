@@ -123,12 +123,19 @@ struct PartConst {
 template <typename P>
 constexpr Chars<P> PartConst<P>::value;
 
+// What follows the channels: "]}", or the "hub" list and then "]}" (hub_table.h).
+template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
+struct Tail {
+  typedef Chars<TailPart> Text;
+  static constexpr Text make() { return PartConst<TailPart>::value; }
+};
+
 template <typename D, const D* Decls, typename S>
 struct Channels;
 template <typename D, const D* Decls>
 struct Channels<D, Decls, cx::Seq<> > {
-  Chars<TailPart> tail;
-  static constexpr Channels make() { return Channels{PartConst<TailPart>::value}; }
+  typename Tail<D, Decls>::Text tail;
+  static constexpr Channels make() { return Channels{Tail<D, Decls>::make()}; }
 };
 template <typename D, const D* Decls, size_t I, size_t... R>
 struct Channels<D, Decls, cx::Seq<I, R...> > {
@@ -163,8 +170,10 @@ template <typename D, const D* Decls, size_t Lo, size_t Hi, bool One = Hi - Lo =
 struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls, (Lo + Hi) / 2, Hi> > {};
 template <typename D, const D* Decls, size_t Lo, size_t Hi>
 struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
+template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
+struct TailMessage : PartMessage<TailPart> {};
 template <typename D, const D* Decls>
-struct DescriptorMessage : sha256::Concat<Parts<D, Decls, 0, D::size() + 1>, PartMessage<TailPart> > {};
+struct DescriptorMessage : sha256::Concat<Parts<D, Decls, 0, D::size() + 1>, TailMessage<D, Decls> > {};
 
 // The first kDigestSize bytes of the JSON's SHA-256 and, right after them in flash, the JSON. Hello
 // sends the digest, found at json - kDigestSize: the table copied into RAM does not grow.
@@ -196,9 +205,10 @@ constexpr uint32_t fnvChars(const char* c, size_t n, uint32_t h, size_t i = 0) {
          : i < n ? fnvChars(c, n, fnv1a(h, (uint8_t)c[i]), i + 1)
                  : h;
 }
+constexpr uint32_t hashOf(const Chars<TailPart>& t, uint32_t h) { return fnvChars(t.c, sizeof(t.c), h); }
 template <typename D, const D* Decls>
 constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<> >& b, uint32_t h) {
-  return fnvChars(b.tail.c, sizeof(b.tail.c), h);
+  return hashOf(b.tail, h);
 }
 template <typename D, const D* Decls, size_t I, size_t... R>
 constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32_t h) {
@@ -304,6 +314,8 @@ constexpr ChannelTable table() {
   static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
                 "a name, unit, description, layout or firmware text longer than 255 characters");
   static_assert(namesUnique(Decls->list), "two channels have the same name");
+  static_assert(allTextsShort(Decls->hub), "a hub channel's name, unit or description longer than 255 characters");
+  static_assert(namesUnique(Decls->hub), "two hub channels have the same name");
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
   static_assert(sizeof(JsonAndDigest<D, Decls>) == sizeof(JsonText<D, Decls>) + kDigestSize,
                 "the JSON follows the digest without a gap");

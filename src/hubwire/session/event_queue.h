@@ -67,6 +67,11 @@ class EventQueue {
     return true;
   }
 
+  /// Is the head sent and waiting for its answer?
+  bool inFlight() const { return inFlight_; }
+  /// The next head sent takes seq s (where one counter numbers more than events: hub_link.cpp).
+  void nextSeqIs(uint8_t s) { seq_ = (uint8_t)(s - 1); }
+
   /// Makes the head due at once (its seq kept: the hub may have it already), as after a new link.
   ///   events.retryNow(now);
   void retryNow(uint16_t now) { sentAt_ = (uint16_t)(now - HUBWIRE_EVENT_RETRY_MS); }

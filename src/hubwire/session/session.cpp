@@ -1,5 +1,6 @@
 #include "session.h"
 
+#include "../channels/hub_table.h"
 #include "../wire/bytes.h"
 
 namespace hubwire {
@@ -8,6 +9,12 @@ namespace {
 const uint8_t kMaxBytesPerUpdate = 128;  // keeps update() short when a burst arrives
 const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: the sender stopped
 }  // namespace
+
+// The hub link's hooks (hub_link.cpp): without hub channels hubTable() is a constant nullptr, the
+// link-time optimiser drops every call, and the sketch links none of the hub link (hub_table.h).
+__attribute__((always_inline)) static inline bool hubHook(Session& s, bool frame) {
+  return hubTable() && HubwireHub<true, void>::dispatch(s, frame);
+}
 
 Session::Session(Port& port)
     : SessionState(),  // all zero
@@ -107,6 +114,7 @@ void Session::update() {
     rx_.reset();
     ++rx_.counters.dropped;
   }
+  hubHook(*this, false);  // sends and retries the sketch's requests
   if (!linked_) {
     if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
       lastSent_ = now;
@@ -123,9 +131,11 @@ void Session::handle(const Frame& f) {
   lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
+      hubHook(*this, true);  // the hub link notes the hub's session and descriptor (hub_link.cpp)
       onHello(f);
       return;
     case kMsgHeartbeat:
+      hubHook(*this, true);  // ... and its health
       if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
       return;
     case kMsgAck:
@@ -133,11 +143,14 @@ void Session::handle(const Frame& f) {
       onAck(f, f.type == kMsgNak);
       return;
     case kMsgChunk:
-    case kMsgRequest:
     case kMsgControl:
+      if (hubHook(*this, true)) return;  // the bind report, chunks of the hub's descriptor
+      break;
+    case kMsgRequest:
     case kMsgSubscribe:
       break;
     default:
+      if (hubHook(*this, true)) return;  // hub events, answers to the device's requests
       ++rx_.counters.dropped;
       sendNak(f, kErrUnknownType);
       return;
@@ -226,7 +239,7 @@ void Session::loseLink() {
 
 void Session::onAck(const Frame& f, bool nak) {
   (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
-  events_.acked(f.seq, f.id);
+  if (!events_.acked(f.seq, f.id)) hubHook(*this, true);  // an answer to the device's own request?
 }
 
 void Session::onChunk(const Frame& f) {

@@ -19,6 +19,7 @@
 #include "../wire/messages.h"
 #include "../wire/values.h"
 #include "event_queue.h"
+#include "hub_link.h"
 #include "streams.h"
 
 namespace hubwire {
@@ -144,7 +145,78 @@ class Session : private SessionState {
   ///   uint16_t bad = session.counters().crc;
   const LinkCounters& counters() const { return rx_.counters; }
 
+  // ---- the hub's own channels, declared with remote(), remoteAction(), remoteEvent() (hub_link.h).
+  // None of these waits: each queues (false when the queue of HUBWIRE_HUB_QUEUE is full, or the
+  // variable or action is not declared so), is sent once the hub has bound the declarations, and
+  // ends in exactly one of its callbacks: done, or fail with a NAK code or kHubTimeout. ----
+
+  /// Asks the hub for a value declared with remote(); its answer lands in var, then done runs.
+  ///   hub.request(setpoint, setpointArrived, setpointFailed);
+  template <typename T>
+  bool request(T& var, HubDone done = nullptr, HubFail fail = nullptr) {
+    return hubQueue(kMsgRequest, &var, done, fail);
+  }
+  /// Writes var's value (as it is now) to a hub value declared with remote(...).writable() or
+  /// writeOnly(); done runs on the hub's ACK, fail with its NAK code. Applied exactly once.
+  ///   hub.write(report, nullptr, reportRefused);
+  template <typename T>
+  bool write(const T& var, HubDone done = nullptr, HubFail fail = nullptr) {
+    static_assert(sizeof(T) <= HUBWIRE_HUB_MAX_VALUE, "value larger than HUBWIRE_HUB_MAX_VALUE: raise it");
+    return hubQueue(kMsgControl, &var, done, fail);
+  }
+  /// Calls a hub action declared with remoteAction(); done gets its return value.
+  ///   hub.call(dock, 0.5f, docked, dockFailed);   // RemoteAction<bool(float)>; void docked(bool)
+  template <typename R, typename A>
+  bool call(RemoteAction<R(A)>& action, const typename Same<A>::type& arg,
+            void (*done)(typename Same<R>::type) = nullptr, HubFail fail = nullptr) {
+    static_assert(sizeof(A) <= HUBWIRE_HUB_MAX_VALUE, "argument larger than HUBWIRE_HUB_MAX_VALUE: raise it");
+    return hubCall(&action, &arg, sizeof(A), reinterpret_cast<HubDone>(done), fail, &deliverAs<R>);
+  }
+  template <typename A>
+  bool call(RemoteAction<void(A)>& action, const typename Same<A>::type& arg, HubDone done = nullptr,
+            HubFail fail = nullptr) {
+    static_assert(sizeof(A) <= HUBWIRE_HUB_MAX_VALUE, "argument larger than HUBWIRE_HUB_MAX_VALUE: raise it");
+    return hubCall(&action, &arg, sizeof(A), done, fail, nullptr);
+  }
+  template <typename R>
+  bool call(RemoteAction<R()>& action, void (*done)(typename Same<R>::type) = nullptr, HubFail fail = nullptr) {
+    return hubCall(&action, nullptr, 0, reinterpret_cast<HubDone>(done), fail, &deliverAs<R>);
+  }
+  bool call(RemoteAction<void()>& action, HubDone done = nullptr, HubFail fail = nullptr) {
+    return hubCall(&action, nullptr, 0, done, fail, nullptr);
+  }
+  /// Reads the hub's own descriptor (JSON) from offset, one chunk: chunk(offset, total, data, n).
+  ///   hub.readHubDescriptor(0, gotChunk);
+  bool readHubDescriptor(uint16_t offset, HubChunk chunk, HubFail fail = nullptr);
+  /// Has the hub bound the declarations (pending, ok, or the first hub id it could not bind)?
+  ///   if (hub.hubBinding().state == hubwire::kBindFailed) showError(hub.hubBinding().index);
+  BindStatus hubBinding() const { return hubLink.bind; }
+  /// The hub's heartbeat interval as measured by the hub and its receiver's error counters.
+  ///   if (hub.hubHealth().crc > 10) slowDown();
+  const HubHealth& hubHealth() const { return hubLink.health; }
+  /// Requests, writes and calls not yet answered.
+  ///   if (hub.hubQueued() == HUBWIRE_HUB_QUEUE) { /* full */ }
+  uint8_t hubQueued() const { return hubLink.queued; }
+  /// The hub's descriptor hash and length, as its hello gives them (0 for a hub that has none).
+  ///   if (hub.hubDescriptorHash() != lastHash) hub.readHubDescriptor(0, gotChunk);
+  uint32_t hubDescriptorHash() const { return hubLink.hubHash; }
+  uint16_t hubDescriptorLength() const { return hubLink.hubLength; }
+
+
  private:
+  // The hub's own channels (hub_link.cpp), reached only through the sketch's hub table.
+  friend bool hubDispatch(Session& s, bool frame);
+  bool hubMine();
+  bool hubQueue(uint8_t type, const void* var, HubDone done, HubFail fail);
+  bool hubCall(const void* handle, const void* arg, uint8_t len, HubDone done, HubFail fail, HubDeliver deliver);
+  HubLink::Entry* hubPush(uint8_t id, uint8_t type, HubDone done, HubFail fail);
+  bool hubFind(uint8_t id, ChannelInfo& ch);
+  bool hubFrame(const Frame& f);
+  void hubAnswer(const Frame& f);
+  void hubEvent(const Frame& f);
+  void hubBind(const Frame& f);
+  void hubPoll(uint16_t now);
+
   bool find(uint8_t id, ChannelInfo& ch);  // ch describes channel id afterwards
   void applyFailsafes();
   bool emitRaw(uint8_t id, const void* value, uint8_t size);

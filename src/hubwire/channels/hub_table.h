@@ -1,0 +1,126 @@
+// The hub channels a sketch declares (remote.h), as the descriptor's "hub" list and as a flash
+// table the session reads (session/hub_link.h).
+//
+// Paying only for what is used: the session's few hooks read hubTable(), a constant the library
+// defines weakly as nullptr (session/hub_flag.cpp) and HUBWIRE_CHANNELS defines again, pointing at
+// the sketch's table, only when the sketch declares hub channels (the explicit specialisations
+// below). The hooks call the hub link through HubwireHub<true, void>::dispatch, which likewise only
+// such a sketch defines: without hub channels the link-time optimiser folds the hooks away, so
+// that nothing references the hub link's code or its RAM (what is left unresolved is a weak
+// reference in code that is gone). (A program has at most one table with hub channels.)
+#ifndef HUBWIRE_CHANNELS_HUB_TABLE_H
+#define HUBWIRE_CHANNELS_HUB_TABLE_H
+
+#include "tables.h"
+
+namespace hubwire {
+
+// The hub channels of the one table that declares them: hub id k is channels[k - 1]. owner is the
+// device channel array of the same table (ChannelTable::channels), which tells its session.
+class Session;
+bool hubDispatch(Session& s, bool frame);  // session/hub_link.cpp
+
+struct HubTable {
+  const ChannelInfo* channels;
+  const ChannelInfo* owner;
+  uint8_t count;
+};
+
+}  // namespace hubwire
+
+// In the global namespace, where HUBWIRE_CHANNELS can specialise it from any namespace: the
+// <true, void> member is the one the session reads; a table without hub channels specialises
+// <false, its own tag>, which nothing reads.
+template <bool Declared, typename Tag>
+struct HubwireHub {
+  static const ::hubwire::HubTable* const table;
+  static bool dispatch(::hubwire::Session& s, bool frame);
+};
+template <>
+const ::hubwire::HubTable* const HubwireHub<true, void>::table;
+template <>
+__attribute__((weak)) bool HubwireHub<true, void>::dispatch(::hubwire::Session& s, bool frame);
+template <bool Declared, typename Tag>
+struct HubwireHubTag {
+  typedef void type;
+};
+template <typename Tag>
+struct HubwireHubTag<false, Tag> {
+  typedef Tag type;
+};
+
+namespace hubwire {
+
+// The sketch's hub table, or nullptr; folds to a constant where the sketch's table is known.
+inline const HubTable* hubTable() { return HubwireHub<true, void>::table; }
+
+namespace declare {
+
+// ---- the "hub" list of the descriptor: `],"hub":[`, one entry per hub channel (the same JSON as
+// a channel's, numbered by hub id), then `]}` ----
+struct HubHeadPart {
+  static constexpr size_t length() { return 9; }
+  static constexpr char at(size_t i) { return "],\"hub\":["[i]; }
+};
+
+// The hub channels seen as a list of channels of their own, so that the channel machinery above
+// writes their JSON and their records.
+template <typename D, const D* Decls>
+struct HubSide {
+  typedef Declared<decltype(Decls->hub)> Type;
+  static constexpr Type value = {Decls->dev, Decls->hub, List<>{}};
+};
+template <typename D, const D* Decls>
+constexpr typename HubSide<D, Decls>::Type HubSide<D, Decls>::value;
+
+template <typename D, const D* Decls>
+struct HubText {
+  typedef typename HubSide<D, Decls>::Type HD;
+  Chars<HubHeadPart> head;
+  Channels<HD, &HubSide<D, Decls>::value, typename cx::MakeSeq<HD::size()>::type> body;
+};
+template <typename D, const D* Decls>
+struct Tail<D, Decls, true> {
+  typedef HubText<D, Decls> Text;
+  typedef typename HubSide<D, Decls>::Type HD;
+  static constexpr Text make() {
+    return Text{PartConst<HubHeadPart>::value,
+                Channels<HD, &HubSide<D, Decls>::value, typename cx::MakeSeq<HD::size()>::type>::make()};
+  }
+};
+template <typename D, const D* Decls>
+struct TailMessage<D, Decls, true>
+    : sha256::Concat<PartMessage<HubHeadPart>,
+                     sha256::Concat<Parts<typename HubSide<D, Decls>::Type, &HubSide<D, Decls>::value, 1,
+                                          HubSide<D, Decls>::Type::size() + 1>,
+                                    PartMessage<TailPart> > > {};
+template <typename D, const D* Decls>
+constexpr uint32_t hashOf(const HubText<D, Decls>& t, uint32_t h) {
+  return hashOf(t.body, fnvChars(t.head.c, sizeof(t.head.c), h));
+}
+
+// ---- the flash table ----
+template <typename D, const D* Decls>
+struct HubTableFlash {
+  static const HubTable value;
+};
+template <typename D, const D* Decls>
+const HubTable HubTableFlash<D, Decls>::value HUBWIRE_FLASH = {
+    Infos<typename HubSide<D, Decls>::Type, &HubSide<D, Decls>::value>::value, Infos<D, Decls>::value,
+    HubSide<D, Decls>::Type::size()};
+
+template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
+struct HubTableOf {
+  static constexpr const HubTable* get() { return nullptr; }
+  static bool dispatch(Session&, bool) { return false; }
+};
+template <typename D, const D* Decls>
+struct HubTableOf<D, Decls, true> {
+  static constexpr const HubTable* get() { return &HubTableFlash<D, Decls>::value; }
+  static bool dispatch(Session& s, bool frame) { return hubDispatch(s, frame); }
+};
+
+}  // namespace declare
+}  // namespace hubwire
+
+#endif

@@ -1,0 +1,8 @@
+// The library's answer to "which table declares hub channels": none. A sketch that declares some
+// defines this constant again (HUBWIRE_CHANNELS, channels/hub_table.h), and the linker takes its
+// definition over this weak one. Kept alone in this file: within one file the compiler would fold
+// the weak value into the code that reads it.
+#include "../channels/hub_table.h"
+
+template <>
+__attribute__((weak)) const ::hubwire::HubTable* const HubwireHub<true, void>::table = nullptr;

@@ -1,0 +1,277 @@
+// The device's side of talking to the hub's own channels (hub_link.h, docs/PROTOCOL.md 10).
+#include "session.h"
+
+#include "../channels/hub_table.h"
+#include "../wire/bytes.h"
+
+namespace hubwire {
+
+HubLink hubLink;
+
+namespace {
+const uint16_t kHubGiveUpMs = (uint16_t)HUBWIRE_HUB_RETRY_MS * HUBWIRE_HUB_TRIES;
+const uint8_t kBindVersion = 1;
+
+void readFlash(void* to, const void* from, size_t n) {
+#if defined(__AVR__)
+  memcpy_P(to, from, n);
+#else
+  memcpy(to, from, n);
+#endif
+}
+}  // namespace
+
+void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len) {
+  reinterpret_cast<HubChunk>(fn)(loadU16(data), loadU16(data + 2), data + kChunkHeader, (uint8_t)(len - kChunkHeader));
+}
+
+// ---- the session's two hooks (session.cpp) ----
+
+// frame: the frame just received (true when it was the hub link's); else time to send and retry.
+bool hubDispatch(Session& s, bool frame) {
+  if (!s.hubMine()) return false;
+  if (frame) return s.hubFrame(s.rx_.frame());
+  s.hubPoll(s.ms());
+  return false;
+}
+
+// Does the hub link serve this session? It does once begin() was given the table with the hub
+// channels; the first question after that sets the link up.
+bool Session::hubMine() {
+  if (hubLink.owner == this) return true;
+  HubTable t;
+  readFlash(&t, hubTable(), sizeof(t));
+  if (!started_ || t.owner != table_.channels) return false;
+  memset(&hubLink, 0, sizeof(hubLink));
+  hubLink.owner = this;
+  hubLink.channels = t.channels;
+  hubLink.count = t.count;
+  return true;
+}
+
+// True when the frame was the hub link's to handle; false lets the session handle it as before.
+bool Session::hubFrame(const Frame& f) {
+  HubLink& l = hubLink;
+  const uint8_t* p = f.payload;
+  switch (f.type) {
+    case kMsgHello:
+      if (f.len >= kHelloSize && p[0] == kProtocolVersion && !(p[1] & kHelloDevice)) {
+        l.hubHash = loadU32(p + 10);
+        l.hubLength = loadU16(p + 14);
+        uint32_t nonce = loadU32(p + 2);
+        if (!l.hubKnown || nonce != l.hubNonce) {  // a new hub session: bind again, events afresh
+          l.hubKnown = true;
+          l.hubNonce = nonce;
+          l.bound = false;
+          l.bind.state = kBindPending;
+          l.eventValid = false;
+        }
+      }
+      return false;
+    case kMsgHeartbeat:
+      if (f.len >= kHeartbeatSize) {
+        ++l.health.beats;
+        l.health.sinceMs = loadU16(p + 2);
+        l.health.crc = loadU16(p + 4);
+        l.health.overflow = loadU16(p + 6);
+        l.health.dropped = loadU16(p + 8);
+      }
+      return false;
+    case kMsgChunk:
+      if (f.len == kChunkRequestSize) return false;  // the hub reading our descriptor
+      hubAnswer(f);
+      return true;
+    case kMsgAck:
+    case kMsgNak:
+    case kMsgResponse: {
+      bool ours = l.queued && l.queue[l.head].tries && f.seq == l.headSeq && f.id == l.queue[l.head].id;
+      if (ours) hubAnswer(f);
+      return ours || f.type == kMsgResponse;  // a late answer to a retry is dropped
+    }
+    case kMsgEvent:
+      if (!linked_) return sendNak(f, kErrNotLinked), true;
+      hubEvent(f);
+      return true;
+    case kMsgControl:
+      if (f.id != 0 || !linked_) return false;
+      hubBind(f);
+      return true;
+    default:
+      return false;
+  }
+}
+
+// An answer to the head: it leaves the queue, then exactly one of its callbacks runs.
+void Session::hubAnswer(const Frame& f) {
+  HubLink& l = hubLink;
+  if (!l.queued || !l.queue[l.head].tries || f.seq != l.headSeq || f.id != l.queue[l.head].id) return;
+  HubLink::Entry e = l.queue[l.head];
+  l.head = (uint8_t)((l.head + 1) % HUBWIRE_HUB_QUEUE);
+  --l.queued;
+  uint8_t code = kOk;
+  if (f.type == kMsgNak) {
+    code = f.len == 1 && f.payload[0] != kOk ? f.payload[0] : (uint8_t)kErrBadLength;
+  } else if (e.type == kMsgChunk) {
+    if (f.type != kMsgChunk || f.len < kChunkHeader || loadU16(f.payload) != loadU16(e.data)) code = kErrBadLength;
+  } else if (e.type == kMsgRequest) {
+    ChannelInfo ch;
+    hubFind(e.id, ch);
+    code = f.type != kMsgResponse ? (uint8_t)kErrBadLength : (uint8_t)ch.type.check(f.payload, f.len);
+    if (code == kOk) ch.type.fromWire(f.payload, f.len, ch.data);
+  } else if (e.deliver) {  // a call answered with its return value
+    ChannelInfo ch;
+    hubFind(e.id, ch);
+    if (f.type != kMsgResponse || f.len != scalarSize(ch.ret)) code = kErrBadLength;
+  }
+  if (code != kOk) {
+    if (e.fail) e.fail(code);
+  } else if (e.deliver) {
+    if (e.done) e.deliver(e.done, f.payload, f.len);
+  } else if (e.done) {
+    e.done();
+  }
+}
+
+// A hub event: stored and its onChange run once; a retry (same seq and id) is acknowledged again.
+void Session::hubEvent(const Frame& f) {
+  HubLink& l = hubLink;
+  if (l.eventValid && f.seq == l.eventSeq && f.id == l.eventId) return reply(kMsgAck, f, 0);
+  ChannelInfo ch;
+  if (!hubFind(f.id, ch) || !(ch.access & kEventAccess)) return sendNak(f, kErrUnknownChannel);
+  uint8_t code = ch.type.check(f.payload, f.len);
+  if (code != kOk) return sendNak(f, code);
+  ch.type.fromWire(f.payload, f.len, ch.data);
+  if (ch.call) functionAt<void (*)()>(ch.call)();
+  l.eventValid = true;
+  l.eventSeq = f.seq;
+  l.eventId = f.id;
+  reply(kMsgAck, f, 0);
+}
+
+// The bind report: [version, status of hub id 1..N]. A hub transaction between two controls, so a
+// control after it with the seq and id of the one before is a new control, not a retry.
+void Session::hubBind(const Frame& f) {
+  HubLink& l = hubLink;
+  uint8_t code = f.len != 1 + l.count ? (uint8_t)kErrBadLength
+               : f.payload[0] != kBindVersion ? (uint8_t)kErrBadValue : (uint8_t)kOk;
+  lastTxnValid_ = false;
+  if (code != kOk) return sendNak(f, code);
+  l.bound = true;
+  l.bind.state = kBindOk;
+  for (uint8_t k = 1; k <= l.count; ++k) {
+    if (f.payload[k] == kOk) continue;
+    l.bind.state = kBindFailed;
+    l.bind.index = k;
+    l.bind.code = f.payload[k];
+    break;
+  }
+  reply(kMsgAck, f, 0);
+}
+
+// Sends the head once the hub has bound this session, retries it, and gives up after
+// HUBWIRE_HUB_TRIES sends; a request that cannot be sent (no link, no bind report: an old hub)
+// gives up as long after it was queued.
+void Session::hubPoll(uint16_t now) {
+  HubLink& l = hubLink;
+  // Events and the device's R, C, J take their seq from one counter: a head event about to be sent
+  // for the first time (later in this update()) takes the next one.
+  if (events_.size() && !events_.inFlight() && (uint8_t)(events_.seq() + 1) != l.counter)
+    events_.nextSeqIs(++l.counter);
+  while (l.queued) {
+    HubLink::Entry& e = l.queue[l.head];
+    bool canSend = linked_ && l.bound;
+    bool giveUp;
+    if (!e.tries) {
+      if (canSend) l.headSeq = ++l.counter;
+      giveUp = !canSend && (uint16_t)(now - e.at) >= kHubGiveUpMs;
+    } else {
+      if ((uint16_t)(now - e.at) < HUBWIRE_HUB_RETRY_MS) return;
+      giveUp = e.tries >= HUBWIRE_HUB_TRIES;
+    }
+    if (giveUp) {
+      HubFail fail = e.fail;
+      l.head = (uint8_t)((l.head + 1) % HUBWIRE_HUB_QUEUE);
+      --l.queued;
+      if (fail) fail(kHubTimeout);
+      continue;
+    }
+    if (!canSend && !e.tries) return;
+    ++e.tries;  // while the link is down, a try passes unsent: the request still ends
+    e.at = now;
+    if (canSend) {
+      memcpy(tx_.payload(), e.data, e.len);
+      tx_.send(port_, e.type, l.headSeq, e.id, e.len);
+    }
+    return;
+  }
+}
+
+// ---- the sketch's requests ----
+
+bool Session::hubFind(uint8_t id, ChannelInfo& ch) {
+  if (id == 0 || id > hubLink.count) return false;
+  readFlash(&ch, &hubLink.channels[id - 1], sizeof(ch));
+  return true;
+}
+
+HubLink::Entry* Session::hubPush(uint8_t id, uint8_t type, HubDone done, HubFail fail) {
+  HubLink& l = hubLink;
+  if (!started_ || l.queued >= HUBWIRE_HUB_QUEUE) return nullptr;
+  HubLink::Entry& e = l.queue[(l.head + l.queued) % HUBWIRE_HUB_QUEUE];
+  ++l.queued;
+  e.id = id;
+  e.type = type;
+  e.len = 0;
+  e.tries = 0;
+  e.at = ms();
+  e.done = done;
+  e.fail = fail;
+  e.deliver = nullptr;
+  return &e;
+}
+
+bool Session::hubQueue(uint8_t type, const void* var, HubDone done, HubFail fail) {
+  if (!hubTable() || !hubMine()) return false;
+  uint8_t want = type == kMsgRequest ? kReadable : kWritable;
+  for (uint8_t id = 1; id <= hubLink.count; ++id) {
+    ChannelInfo ch;
+    hubFind(id, ch);
+    if (ch.data != var || !(ch.access & want) || (ch.access & (kCallable | kEventAccess))) continue;
+    if (type == kMsgControl && ch.type.wireSize() > HUBWIRE_HUB_MAX_VALUE) return false;
+    HubLink::Entry* e = hubPush(id, type, done, fail);
+    if (!e) return false;
+    if (type == kMsgControl) e->len = (uint8_t)ch.type.toWire(var, e->data);  // the value as it is now
+    return true;
+  }
+  return false;
+}
+
+bool Session::hubCall(const void* handle, const void* arg, uint8_t len, HubDone done, HubFail fail,
+                      HubDeliver deliver) {
+  if (!hubTable() || !hubMine()) return false;
+  for (uint8_t id = 1; id <= hubLink.count; ++id) {
+    ChannelInfo ch;
+    hubFind(id, ch);
+    if (ch.data != handle || !(ch.access & kCallable)) continue;
+    HubLink::Entry* e = hubPush(id, kMsgControl, done, fail);
+    if (!e) return false;
+    if (len) memcpy(e->data, arg, len);  // a scalar: its memory is its wire form
+    e->len = len;
+    e->deliver = deliver;
+    return true;
+  }
+  return false;
+}
+
+bool Session::readHubDescriptor(uint16_t offset, HubChunk chunk, HubFail fail) {
+  if (!hubTable() || !hubMine()) return false;
+  HubLink::Entry* e = hubPush(0, kMsgChunk, reinterpret_cast<HubDone>(chunk), fail);
+  if (!e) return false;
+  storeU16(e->data, offset);
+  e->data[2] = (uint8_t)(HUBWIRE_MAX_PAYLOAD - kChunkHeader);  // all the device takes
+  e->len = kChunkRequestSize;
+  e->deliver = &deliverChunk;
+  return true;
+}
+
+}  // namespace hubwire

@@ -1,0 +1,91 @@
+// The device's side of talking to the hub's own channels (docs/PROTOCOL.md 10): its requests,
+// writes and calls (R, C, J to the hub, stop-and-wait, retried with the same seq), the hub's
+// events (`!`, delivered exactly once and in order), the bind report (C id 0) and the hub's health.
+//
+// One HubLink exists in a program, serving the session whose table declares hub channels
+// (channels/hub_table.h). The session reaches it only through two hooks that test hubTable(), which
+// the link-time optimiser folds: a sketch without hub channels links neither this code nor this RAM.
+#ifndef HUBWIRE_SESSION_HUB_LINK_H
+#define HUBWIRE_SESSION_HUB_LINK_H
+
+#include <stdint.h>
+
+#include "../config.h"
+#include "../channels/channel.h"
+
+namespace hubwire {
+
+class Session;
+
+/// Whether the hub bound what the sketch expects of it (its bind report, PROTOCOL.md 10.4).
+enum BindState : uint8_t { kBindPending = 0, kBindOk = 1, kBindFailed = 2 };
+struct BindStatus {
+  uint8_t state;  // BindState: pending until this hub session's report arrives
+  uint8_t index;  // kBindFailed: the first hub id (1..N, declaration order) the hub could not bind
+  uint8_t code;   // ... and why: a NAK code (UNKNOWN_CHANNEL, BAD_LENGTH, NOT_WRITABLE, NOT_READABLE)
+  bool pending() const { return state == kBindPending; }
+  bool ok() const { return state == kBindOk; }
+};
+
+/// The hub as its heartbeats describe it, as the hub sees the device's.
+struct HubHealth {
+  uint16_t beats;     // hub heartbeats heard since begin()
+  uint16_t sinceMs;   // the latest one's "ms since previous": the hub's actual interval
+  uint16_t crc, overflow, dropped;  // the hub's receiver error counters, as of that heartbeat
+};
+
+/// A failure callback's code when the hub never answered (the others are the hub's NAK codes).
+const uint8_t kHubTimeout = 0xF0;
+
+typedef void (*HubDone)();
+typedef void (*HubFail)(uint8_t code);
+// Hands a typed answer to the sketch's callback (stored as HubDone, cast back here).
+typedef void (*HubDeliver)(HubDone fn, const uint8_t* data, uint8_t len);
+
+template <typename R>
+void deliverAs(HubDone fn, const uint8_t* data, uint8_t) {
+  R r;
+  memcpy(&r, data, sizeof(R));
+  reinterpret_cast<void (*)(R)>(fn)(r);
+}
+typedef void (*HubChunk)(uint16_t offset, uint16_t total, const uint8_t* data, uint8_t n);
+void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len);
+
+class HubLink {
+ public:
+  // One request, write, call or descriptor read waiting for the hub; only the head is in flight.
+  struct Entry {
+    uint8_t id, type, len;  // hub id, message type (R, C, J), payload length
+    uint8_t tries;          // sends so far (0: not sent yet)
+    uint16_t at;            // when queued, then when last sent (16-bit ms)
+    HubDone done;
+    HubFail fail;
+    HubDeliver deliver;  // typed answers (an action's return value, a chunk); nullptr: done()
+    uint8_t data[HUBWIRE_HUB_MAX_VALUE];
+  };
+
+  Session* owner;              // the session whose table declares the hub channels
+  const ChannelInfo* channels;  // hub id k: channels[k - 1], in flash
+  uint8_t count;
+
+  Entry queue[HUBWIRE_HUB_QUEUE];
+  uint8_t head, queued;
+  uint8_t counter;  // the device's transaction counter: its events and its R, C, J
+  uint8_t headSeq;
+  bool hubKnown;    // hubNonce: the hub session the link last saw
+  uint32_t hubNonce;
+  bool bound;       // the bind report of this hub session has arrived
+  bool eventValid;  // eventSeq/eventId: the last hub event delivered (duplicates are re-acked)
+  uint8_t eventSeq, eventId;
+  BindStatus bind;
+  HubHealth health;
+  uint32_t hubHash;  // the hub's descriptor, as its hello names it
+  uint16_t hubLength;
+};
+
+// The program's one hub link (hub_link.cpp); zero until a session with hub channels begins.
+extern HubLink hubLink;
+
+}  // namespace hubwire
+
+#endif
