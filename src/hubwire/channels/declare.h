@@ -39,13 +39,11 @@
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
                                      &hubwire_channels_##var::declared>::get();                    \
   template <>                                                                                      \
-  bool ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                                \
+  bool (*const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                        \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
-                      hubwire_channels_##var::Tag>::type>::dispatch(::hubwire::Session& s,         \
-                                                                    bool frame) { \
-    return ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                           \
-                                          &hubwire_channels_##var::declared>::dispatch(s, frame); \
-  }                                                                                                \
+                      hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, bool) =  \
+      ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
+                                     &hubwire_channels_##var::declared>::dispatch();               \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>()
 

@@ -102,7 +102,7 @@ class Decl {
   ///   expose("speed", speed).writable()
   constexpr Decl writable() const {
     static_assert(K == kVariable || K == kRemote,
-                  "writable(): only a variable declared with expose() or remote() can be written");
+                  "writable(): only a variable declared with expose() can be written by the hub (or remote(), by the sketch)");
     return Decl(*this, unit_, description_, (uint8_t)(access_ | kWritable), flags_, lo_, hi_, failsafe_, call_);
   }
   /// The hub may subscribe to samples of it at an interval.
@@ -148,7 +148,7 @@ class Decl {
   ///   expose("led", led).writable().onChange(ledChanged)
   constexpr Decl onChange(void (*fn)()) const {
     static_assert(K == kVariable || K == kRemoteEvent,
-                  "onChange(): only a variable declared with expose() or remoteEvent() has one (a control calls its function)");
+                  "onChange(): only a variable declared with expose() has one (a control calls its function), or remoteEvent()");
     return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kOnChangeGiven), lo_, hi_, failsafe_, fn);
   }
 
@@ -372,12 +372,14 @@ struct Prepend<true, H, List<X...> > {
 };
 template <bool Remote, typename... D>
 struct Pick {
+  static const size_t count = 0;  // a size_t: List's uint8_t size wraps at 256
   typedef List<> type;
   static constexpr type make() { return type{}; }
 };
 template <bool Remote, typename H, typename... R>
 struct Pick<Remote, H, R...> {
   typedef Pick<Remote, R...> Rest;
+  static const size_t count = Rest::count + (IsRemote<H>::value == Remote ? 1 : 0);
   typedef Prepend<IsRemote<H>::value == Remote, H, typename Rest::type> Add;
   typedef typename Add::type type;
   static constexpr type make(const H& h, const R&... r) { return Add::make(h, Rest::make(r...)); }
@@ -385,9 +387,9 @@ struct Pick<Remote, H, R...> {
 
 template <typename... D>
 constexpr Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type> declared(DeviceName dev, D... d) {
-  static_assert(Pick<false, D...>::type::size <= HUBWIRE_MAX_CHANNELS,
+  static_assert(Pick<false, D...>::count <= HUBWIRE_MAX_CHANNELS,
                 "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
-  static_assert(Pick<true, D...>::type::size <= HUBWIRE_MAX_HUB_CHANNELS,
+  static_assert(Pick<true, D...>::count <= HUBWIRE_MAX_HUB_CHANNELS,
                 "more hub channels than HUBWIRE_MAX_HUB_CHANNELS: raise it");
   return Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type>{
       dev, Pick<false, D...>::make(d...), Pick<true, D...>::make(d...)};

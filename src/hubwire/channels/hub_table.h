@@ -34,12 +34,12 @@ struct HubTable {
 template <bool Declared, typename Tag>
 struct HubwireHub {
   static const ::hubwire::HubTable* const table;
-  static bool dispatch(::hubwire::Session& s, bool frame);
+  static bool (*const dispatch)(::hubwire::Session& s, bool frame);
 };
 template <>
 const ::hubwire::HubTable* const HubwireHub<true, void>::table;
 template <>
-__attribute__((weak)) bool HubwireHub<true, void>::dispatch(::hubwire::Session& s, bool frame);
+bool (*const HubwireHub<true, void>::dispatch)(::hubwire::Session& s, bool frame);
 template <bool Declared, typename Tag>
 struct HubwireHubTag {
   typedef void type;
@@ -112,12 +112,12 @@ const HubTable HubTableFlash<D, Decls>::value HUBWIRE_FLASH = {
 template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
 struct HubTableOf {
   static constexpr const HubTable* get() { return nullptr; }
-  static bool dispatch(Session&, bool) { return false; }
+  static constexpr bool (*dispatch())(Session&, bool) { return nullptr; }
 };
 template <typename D, const D* Decls>
 struct HubTableOf<D, Decls, true> {
   static constexpr const HubTable* get() { return &HubTableFlash<D, Decls>::value; }
-  static bool dispatch(Session& s, bool frame) { return hubDispatch(s, frame); }
+  static constexpr bool (*dispatch())(Session&, bool) { return &hubDispatch; }
 };
 
 }  // namespace declare

@@ -6,3 +6,5 @@
 
 template <>
 __attribute__((weak)) const ::hubwire::HubTable* const HubwireHub<true, void>::table = nullptr;
+template <>
+__attribute__((weak)) bool (*const HubwireHub<true, void>::dispatch)(::hubwire::Session&, bool) = nullptr;

@@ -235,7 +235,7 @@ bool Session::hubQueue(uint8_t type, const void* var, HubDone done, HubFail fail
   uint8_t want = type == kMsgRequest ? kReadable : kWritable;
   for (uint8_t id = 1; id <= hubLink.count; ++id) {
     ChannelInfo ch;
-    hubFind(id, ch);
+    if (!hubFind(id, ch)) continue;
     if (ch.data != var || !(ch.access & want) || (ch.access & (kCallable | kEventAccess))) continue;
     if (type == kMsgControl && ch.type.wireSize() > HUBWIRE_HUB_MAX_VALUE) return false;
     HubLink::Entry* e = hubPush(id, type, done, fail);
@@ -251,7 +251,7 @@ bool Session::hubCall(const void* handle, const void* arg, uint8_t len, HubDone 
   if (!hubTable() || !hubMine()) return false;
   for (uint8_t id = 1; id <= hubLink.count; ++id) {
     ChannelInfo ch;
-    hubFind(id, ch);
+    if (!hubFind(id, ch)) continue;
     if (ch.data != handle || !(ch.access & kCallable)) continue;
     HubLink::Entry* e = hubPush(id, kMsgControl, done, fail);
     if (!e) return false;

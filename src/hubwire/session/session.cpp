@@ -13,7 +13,7 @@ const uint8_t kStalledFrameMs = 50;      // no byte of a frame for this long: th
 // The hub link's hooks (hub_link.cpp): without hub channels hubTable() is a constant nullptr, the
 // link-time optimiser drops every call, and the sketch links none of the hub link (hub_table.h).
 __attribute__((always_inline)) static inline bool hubHook(Session& s, bool frame) {
-  return hubTable() && HubwireHub<true, void>::dispatch(s, frame);
+  return HubwireHub<true, void>::dispatch && HubwireHub<true, void>::dispatch(s, frame);
 }
 
 Session::Session(Port& port)
