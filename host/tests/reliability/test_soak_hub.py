@@ -43,3 +43,27 @@ def test_the_check_sees_each_kind_of_failure() -> None:
     assert check_hub_soak(dict(good, device={"calls_wrong": 1}))
     assert check_hub_soak(dict(good, ticks=4))
     assert check_hub_soak(dict(good, ticks_in_order=False))
+
+
+def test_the_per_boot_hub_check_sees_each_kind_of_failure() -> None:
+    from hubwire.testing.faultlink.soak_hub import check_hub_boots
+
+    dev = {"tally_token": 8, "tally_acked": 7, "tally_failed": 1, "bump_ok": 2, "bump_wrong": 0, "bump_failed": 0,
+           "ticks": 5, "tick_first": 1, "tick_last": 5, "tick_twice": 0, "tick_gaps": 0, "last_hub_failure": 0,
+           "hub_queued_now": 0}
+    boot = {"device": dev, "notified": 5, "pending": 0, "applied": 8, "applied_twice": 0, "applied_never_sent": 0,
+            "called": 2, "called_twice": 0, "called_never_sent": 0}
+    second = dict(boot, device=dict(dev, tick_first=6, tick_last=9, ticks=4), notified=9)
+    assert check_hub_boots([boot, second]) == []
+    broken = [
+        dict(boot, applied_twice=1), dict(boot, applied_never_sent=1), dict(boot, called_twice=1),
+        dict(boot, applied=6),                                   # an acked token never applied
+        dict(boot, device=dict(dev, tally_acked=6)),            # a write neither acked nor failed
+        dict(boot, device=dict(dev, bump_wrong=1, bump_ok=1)),  # a wrong answer accepted
+        dict(boot, device=dict(dev, tick_twice=1)), dict(boot, device=dict(dev, tick_gaps=1)),
+        dict(boot, pending=1),
+    ]
+    for b in broken:
+        assert check_hub_boots([b, second]), b
+    assert check_hub_boots([boot, dict(second, device=dict(second["device"], tick_first=7, ticks=3))])
+    assert check_hub_boots([boot, dict(second, notified=10)])   # the last event never arrived

@@ -233,3 +233,107 @@ def main(argv: Optional[List[str]] = None) -> int:
 
 if __name__ == "__main__":
     raise SystemExit(main())
+
+
+# ------------------------------------------------------------------ the C++ soak sketch's hub channels
+
+
+class HubTraffic:
+    """The hub's side of the soak sketch's hub channels (extras/tests/Soak: ``tally``, ``bump``,
+    ``tick``), counted per device boot: :meth:`close_boot` stops the sketch's requests on a clean
+    link, lets every event in, and returns what both sides counted (:func:`check_hub_boots`)."""
+
+    #: hub events waiting at most (the soak notifies one per step while fewer wait)
+    PENDING = 20
+
+    def __init__(self) -> None:
+        import hubwire
+
+        self.lock = threading.Lock()
+        self.applied: Dict[int, int] = {}
+        self.called: Dict[int, int] = {}
+        self.notified = 0
+        self.boots: List[Dict[str, Any]] = []
+        self.hub = hubwire.HubChannels("soak-hub")
+        self.hub.accept("tally", self._tally, type="u32")
+        self.hub.action("bump", self._bump, type="u32", returns="u32")
+        self.hub.event("tick", type="u32")
+
+    def _tally(self, token: int) -> None:
+        with self.lock:
+            self.applied[token] = self.applied.get(token, 0) + 1
+
+    def _bump(self, arg: int) -> int:
+        with self.lock:
+            self.called[arg] = self.called.get(arg, 0) + 1
+        return (arg + 1) & 0xFFFFFFFF
+
+    def start(self, dev: Any) -> None:
+        """Let the sketch drive the hub's channels (a write, retried until it is acknowledged)."""
+        from .soak_load import retry
+
+        retry(lambda: setattr(dev, "hub_load", True), "write hub_load")
+
+    def step(self, dev: Any) -> None:
+        """One more tick event, unless enough wait (during a dead link they pile up, bounded)."""
+        import hubwire
+
+        if dev.notifications_pending < self.PENDING:
+            try:
+                dev.notify("tick", self.notified + 1)
+                self.notified += 1
+            except hubwire.HubwireError:
+                pass
+
+    def close_boot(self, dev: Any) -> Dict[str, Any]:
+        """On a clean link: stop the sketch's requests, wait until none is left and every event is
+        in, read the sketch's counters, and settle this boot's counts."""
+        from .soak_load import retry, wait_for
+
+        retry(lambda: setattr(dev, "hub_load", False), "write hub_load")
+        wait_for(lambda: retry(lambda: dev.hub_queued_now, "read hub_queued_now") == 0, 15)
+        wait_for(lambda: dev.notifications_pending == 0, 15)
+        names = ("tally_token", "tally_acked", "tally_failed", "bump_ok", "bump_wrong", "bump_failed", "ticks",
+                 "tick_first", "tick_last", "tick_twice", "tick_gaps", "last_hub_failure", "hub_queued_now")
+        device = {n: retry(lambda: getattr(dev, n), f"read {n}") for n in names}
+        with self.lock:
+            applied, called = self.applied, self.called
+            self.applied, self.called = {}, {}
+        t = device["tally_token"]
+        boot = {"device": device, "notified": self.notified, "pending": dev.notifications_pending,
+                "applied": len(applied), "applied_twice": sum(1 for n in applied.values() if n > 1),
+                "applied_never_sent": sum(1 for k in applied if not 1 <= k <= t),
+                "called": len(called), "called_twice": sum(1 for n in called.values() if n > 1),
+                "called_never_sent": sum(1 for k in called if not (1 <= k <= t and k % 4 == 0))}
+        self.boots.append(boot)
+        return boot
+
+
+def check_hub_boots(boots: List[Dict[str, Any]]) -> List[str]:
+    """Exactly once both ways, per boot: nothing applied twice, nothing acked and not applied,
+    nothing accepted that was never sent; ticks once each and in order across the boots."""
+    bad: List[str] = []
+    prev_last = 0
+    for i, b in enumerate(boots):
+        c, where = b["device"], f"boot {i + 1} (hub channels)"
+        t, a, f = c["tally_token"], c["tally_acked"], c["tally_failed"]
+        if a + f != t or c["hub_queued_now"]:
+            bad.append(f"{where}: {t} tally writes, {a} acked + {f} failed, {c['hub_queued_now']} still queued")
+        for key in ("applied_twice", "applied_never_sent", "called_twice", "called_never_sent", "pending"):
+            if b[key]:
+                bad.append(f"{where}: {key} {b[key]}")
+        if not a <= b["applied"] <= a + f:
+            bad.append(f"{where}: the hub applied {b['applied']} tokens, the device saw {a} acked and {f} failed")
+        calls = t // 4
+        if c["bump_ok"] + c["bump_wrong"] + c["bump_failed"] != calls or c["bump_wrong"]:
+            bad.append(f"{where}: {calls} calls: {c['bump_ok']} right, {c['bump_wrong']} wrong, {c['bump_failed']} failed")
+        if not c["bump_ok"] <= b["called"] <= c["bump_ok"] + c["bump_failed"]:
+            bad.append(f"{where}: the hub ran bump for {b['called']} arguments, the device got {c['bump_ok']} answers")
+        if c["tick_twice"] or c["tick_gaps"]:
+            bad.append(f"{where}: ticks applied twice {c['tick_twice']}, skipped {c['tick_gaps']}")
+        if c["ticks"] and (c["tick_first"] != prev_last + 1 or c["ticks"] != c["tick_last"] - c["tick_first"] + 1):
+            bad.append(f"{where}: ticks {c['tick_first']}..{c['tick_last']} ({c['ticks']}) after {prev_last}")
+        prev_last = c["tick_last"] or prev_last
+    if boots and prev_last != boots[-1]["notified"]:
+        bad.append(f"hub events: {boots[-1]['notified']} notified, the last the device got is {prev_last}")
+    return bad
