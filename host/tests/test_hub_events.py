@@ -157,3 +157,23 @@ def test_info_lists_the_hub_channels_the_device_uses(tmp_path: Any) -> None:
                               env=env, timeout=60).stdout
         table = text.split("hub channels thermo uses")[1]
         assert "mode" in table and "event" in table and "temp" not in table.split("struct")[0]
+
+
+def test_aio_connect_with_hub_channels_and_notify() -> None:
+    import asyncio
+
+    async def main() -> None:
+        with HubDevice() as dev:
+            hub = full_hub([])
+            hub.remove("target")
+            with pytest.raises(HubChannelError, match="writes hub channel 'target'"):
+                await hubwire.aio.connect(dev.path, timeout=5, cache_dir=False, hub=hub)
+            hub.accept("target", type="i16")
+            async with hubwire.aio.connect(dev.path, timeout=5, cache_dir=False, hub=hub) as d:
+                for i in (7, 8):
+                    d.notify("mode", i)
+                loop = asyncio.get_running_loop()
+                assert await loop.run_in_executor(None, wait_for, lambda: len(dev.events) == 2)
+                assert dev.events == [(4, b"\x07"), (4, b"\x08")] and d.notifications_pending == 0
+                assert d.hub_binding()["target"] == "ok"
+    asyncio.run(main())
