@@ -83,6 +83,8 @@ def test_bind_report_then_rebind_when_declared() -> None:
     with HubDevice() as dev, connect(dev) as d:
         assert wait_for(lambda: len(dev.binds) >= 1)
         assert dev.binds[0] == bytes([1, 2, 2, 2, 2, 2])  # nothing declared: all UNKNOWN_CHANNEL
+        h = dev.hub_hello
+        assert h is not None and (h.descriptor_hash, h.descriptor_length) == (0, 0)  # a hub without channels
         assert d.hub_binding() == {n: "UNKNOWN_CHANNEL" for n in ("setpoint", "report", "dock", "mode", "target")}
         d.provide("setpoint", 20.0)
         assert wait_for(lambda: dev.binds[-1] == bytes([1, 0, 2, 2, 2, 2]))
