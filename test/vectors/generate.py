@@ -38,8 +38,8 @@ def _sibling(name: str) -> Any:
     return module
 
 
-session_rules = _sibling("session_rules")
-both_frames = _sibling("both_frames")  # issue 18: both directions (PROTOCOL.md 10)  # the session rules of PROTOCOL.md section 8
+session_rules = _sibling("session_rules")  # the session rules of PROTOCOL.md section 8
+both_frames = _sibling("both_frames")  # frames of both directions (PROTOCOL.md 10)
 
 # ---------------------------------------------------------------------------------------------- CRC
 

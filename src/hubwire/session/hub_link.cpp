@@ -65,6 +65,7 @@ bool Session::hubFrame(const Frame& f) {
           l.bound = false;
           l.bind.state = kBindPending;
           l.eventValid = false;
+          l.controlValid = false;
         }
       }
       return false;
@@ -77,8 +78,11 @@ bool Session::hubFrame(const Frame& f) {
         l.health.dropped = loadU16(p + 8);
       }
       return false;
-    case kMsgChunk:
-      if (f.len == kChunkRequestSize) return false;  // the hub reading our descriptor
+    case kMsgChunk:  // an answer: counted as a hub transaction on its way here, which it is not
+      lastTxnValid_ = l.controlValid;
+      lastTxnControl_ = true;
+      lastTxnSeq_ = l.controlSeq;
+      lastTxnId_ = l.controlId;
       hubAnswer(f);
       return true;
     case kMsgAck:
@@ -92,10 +96,12 @@ bool Session::hubFrame(const Frame& f) {
       if (!linked_) return sendNak(f, kErrNotLinked), true;
       hubEvent(f);
       return true;
-    case kMsgControl:
-      if (f.id != 0 || !linked_) return false;
-      hubBind(f);
-      return true;
+    case kMsgControl:  // about to be answered (linked): the bind report, or a control to remember
+      if (f.id == 0) return hubBind(f), true;
+      l.controlValid = true;  // (its payload may be the answer by now: only seq and id are read)
+      l.controlSeq = f.seq;
+      l.controlId = f.id;
+      return false;
     default:
       return false;
   }
@@ -148,13 +154,16 @@ void Session::hubEvent(const Frame& f) {
   reply(kMsgAck, f, 0);
 }
 
-// The bind report: [version, status of hub id 1..N]. A hub transaction between two controls, so a
-// control after it with the seq and id of the one before is a new control, not a retry.
+// The bind report: [version, status of hub id 1..N]. A control like any other: its answer is kept,
+// so that a retry of it is answered again and not applied twice (session.cpp, handle()).
 void Session::hubBind(const Frame& f) {
   HubLink& l = hubLink;
   uint8_t code = f.len != 1 + l.count ? (uint8_t)kErrBadLength
                : f.payload[0] != kBindVersion ? (uint8_t)kErrBadValue : (uint8_t)kOk;
-  lastTxnValid_ = false;
+  l.controlValid = false;
+  replyType_ = code == kOk ? kMsgAck : kMsgNak;
+  replyLen_ = code == kOk ? 0 : 1;
+  replyData_[0] = code;
   if (code != kOk) return sendNak(f, code);
   l.bound = true;
   l.bind.state = kBindOk;

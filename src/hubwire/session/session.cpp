@@ -143,10 +143,8 @@ void Session::handle(const Frame& f) {
       onAck(f, f.type == kMsgNak);
       return;
     case kMsgChunk:
-    case kMsgControl:
-      if (hubHook(*this, true)) return;  // the bind report, chunks of the hub's descriptor
-      break;
     case kMsgRequest:
+    case kMsgControl:
     case kMsgSubscribe:
       break;
     default:
@@ -243,7 +241,10 @@ void Session::onAck(const Frame& f, bool nak) {
 }
 
 void Session::onChunk(const Frame& f) {
-  if (f.len != kChunkRequestSize) return sendNak(f, kErrBadLength);
+  if (f.len != kChunkRequestSize) {
+    if (hubHook(*this, true)) return;  // a chunk of the hub's descriptor (hub_link.cpp)
+    return sendNak(f, kErrBadLength);
+  }
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
   uint16_t total = table_.jsonLength;
@@ -301,10 +302,12 @@ void Session::onControl(const Frame& f) {
     }
   }
   if (code != kOk) {
+    if (f.id == 0 && hubHook(*this, true)) return;  // the bind report (hub_link.cpp)
     type = kMsgNak;
     len = 1;
     tx_.payload()[0] = code;
   }
+  hubHook(*this, true);  // the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
   memcpy(replyData_, tx_.payload(), len);
