@@ -99,6 +99,17 @@ class AsyncDevice(HubMethods):
     def _hub_side(self) -> HubSide:
         return self._core.hub
 
+    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once every hub event queued with :meth:`notify` was acknowledged by the device;
+        :class:`hubwire.Timeout` after ``timeout`` s (None: no limit)."""
+        core = self._core
+        end = None if timeout is None else core.loop.time() + timeout
+        while core.hub.queue and not core.closed:
+            left = 3600.0 if end is None else end - core.loop.time()
+            if left <= 0:
+                raise Timeout(f"{len(core.hub.queue)} hub events still wait for the device after {timeout} s")
+            await core.changes(left)
+
     @property
     def core(self) -> SessionCore:
         """The session core (its ``stats``, ``link``, ...)."""

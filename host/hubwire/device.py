@@ -5,7 +5,7 @@ from typing import Any, Callable, List, Optional, Tuple
 
 from . import ops
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError
+from .errors import HubwireError, Timeout
 from .hub_face import HubMethods
 from .iterators import EventStream, Stream
 from .ports import KNOWN_USB_VIDS, find_port
@@ -100,6 +100,14 @@ class Device(HubMethods):
 
     def _hub_side(self) -> HubSide:
         return self._session.core.hub
+
+    def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once every hub event queued with :meth:`notify` was acknowledged by the device
+        (before closing, say); :class:`hubwire.Timeout` after ``timeout`` s (None: no limit)."""
+        core = self._session.core
+        with core.sync_cv:
+            if not core.sync_cv.wait_for(lambda: not core.hub.queue or core.closed, timeout):
+                raise Timeout(f"{len(core.hub.queue)} hub events still wait for the device after {timeout} s")
 
     def _desc(self) -> Descriptor:
         d = self._session.descriptor

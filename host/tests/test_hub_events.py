@@ -88,6 +88,21 @@ def test_not_linked_bind_report_is_sent_again() -> None:
             assert wait_for(lambda: dev.events == [(4, b"\x01")])
 
 
+def test_wait_notified_returns_once_every_event_is_acknowledged() -> None:
+    with HubDevice(ack_event=lambda seq, nth: nth > 0) as dev, connect(dev, hub=full_hub([])) as d:
+        for i in range(5):
+            d.notify("mode", i)
+        d.wait_notified(10)
+        assert dev.events == [(4, bytes((i,))) for i in range(5)]  # no waiting: all were acked
+        dev.mute = True
+        d.notify("mode", 9)
+        with pytest.raises(hubwire.Timeout, match="1 hub events still wait"):
+            d.wait_notified(0.3)
+        dev.mute = False
+        d.wait_notified(10)
+        assert dev.events[-1] == (4, b"\x09")
+
+
 def test_events_wait_for_the_bind_report_and_are_checked() -> None:
     hub = HubChannels()
     hub.event("mode", type="u8")
@@ -172,8 +187,7 @@ def test_aio_connect_with_hub_channels_and_notify() -> None:
             async with hubwire.aio.connect(dev.path, timeout=5, cache_dir=False, hub=hub) as d:
                 for i in (7, 8):
                     d.notify("mode", i)
-                loop = asyncio.get_running_loop()
-                assert await loop.run_in_executor(None, wait_for, lambda: len(dev.events) == 2)
+                await d.wait_notified(10)
                 assert dev.events == [(4, b"\x07"), (4, b"\x08")] and d.notifications_pending == 0
                 assert d.hub_binding()["target"] == "ok"
     asyncio.run(main())

@@ -232,6 +232,8 @@ class HubSide:
                 self._kick_in_a_while()
                 return True
             ev = self.queue.popleft()
+            if not self.queue:
+                self.core.wake()  # whoever waits for the queue to empty (wait_notified)
             if f.type == m.ACK:
                 self.core.stats.hub_events_delivered += 1
             else:
