@@ -50,5 +50,15 @@ read -r bf bs _ < <(size_of extras/bench/SerialEcho)
     if [ $ds -gt "$ts" ]; then vs="**missed**"; fi
     echo "| $name | $f | $r | +$df | +$ds | +$tf / +$ts | $vf | $vs | $heap |"
   done
+  # What talking to the hub's own channels costs (docs/PROTOCOL.md 10): the Thermostat example against
+  # the same sketch with the setpoint, report, alarm and mode kept on the board.
+  read -r tf ts _ < <(size_of examples/Thermostat)
+  read -r lf ls _ < <(size_of extras/bench/ThermostatLocal)
+  echo
+  echo "Hub channels (examples/Thermostat: remote() read and written, remoteAction(), remoteEvent(), with"
+  echo "their calls) over extras/bench/ThermostatLocal (the same sketch without them): flash $tf - $lf ="
+  echo "+$((tf - lf)) B, static SRAM $ts - $ls = +$((ts - ls)) B (the hub link: queue of HUBWIRE_HUB_QUEUE"
+  echo "requests, bind status, health). A sketch that declares no hub channel pays nothing: every other"
+  echo "example has the same flash and SRAM as before the hub channels existed."
 } > bench/FOOTPRINT.md
 cat bench/FOOTPRINT.md

@@ -11,7 +11,8 @@ SCRIPT_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(realpath "$SCRIPT_DIR/../..")
 BUILD_ROOT=$(realpath -m "${1:-$ROOT/build/config-limits}")
 
-# sketch | flags. Rover declares every kind of channel; Minimal's values fit the smallest payload.
+# sketch | flags. Rover declares every kind of channel; Minimal's values fit the smallest payload;
+# Thermostat declares the hub's channels (its four need HUBWIRE_MAX_HUB_CHANNELS=4, its float argument 4 bytes).
 # Largest buffers are taken one at a time: all of them at once need more than the Uno's 2 KB.
 # The smallest settings are the smallest Minimal fits: its three channels need
 # HUBWIRE_MAX_CHANNELS=3 (fewer is a compile error by design, declare.h).
@@ -23,6 +24,8 @@ CASES=(
   "Minimal|-DHUBWIRE_HEARTBEAT_MS=10 -DHUBWIRE_LOST_AFTER_BEATS=2 -DHUBWIRE_ANNOUNCE_MS=10 -DHUBWIRE_EVENT_RETRY_MS=10"
   "Minimal|-DHUBWIRE_HEARTBEAT_MS=10 -DHUBWIRE_LOST_AFTER_BEATS=6553"
   "Minimal|-DHUBWIRE_HEARTBEAT_MS=16383 -DHUBWIRE_ANNOUNCE_MS=60000 -DHUBWIRE_EVENT_RETRY_MS=60000"
+  "Thermostat|-DHUBWIRE_HUB_QUEUE=1 -DHUBWIRE_HUB_MAX_VALUE=4 -DHUBWIRE_MAX_HUB_CHANNELS=4 -DHUBWIRE_HUB_RETRY_MS=10 -DHUBWIRE_HUB_TRIES=1"
+  "Thermostat|-DHUBWIRE_HUB_QUEUE=32 -DHUBWIRE_HUB_MAX_VALUE=32 -DHUBWIRE_MAX_HUB_CHANNELS=31 -DHUBWIRE_HUB_RETRY_MS=257 -DHUBWIRE_HUB_TRIES=255"
 )
 
 fail=0

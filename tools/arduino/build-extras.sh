@@ -13,6 +13,7 @@ BUILD_ROOT=$(realpath -m "${1:-$ROOT/build/extras}")
 # sketch | build name | flags
 CASES=(
   "extras/bench/SerialEcho|SerialEcho|"
+  "extras/bench/ThermostatLocal|ThermostatLocal|"
   "extras/bench/RxCycles|RxCycles|-I$ROOT/examples/Rover"
   "extras/bench/lowerbound/NoHub|NoHub|-I$ROOT/examples/Minimal"
   "extras/bench/lowerbound/Tight|Tight|-I$ROOT/examples/Minimal"

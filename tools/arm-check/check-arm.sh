@@ -61,6 +61,9 @@ for cpu in "${CPUS[@]}"; do
 	if [ $HAVE_SKETCH = 1 ]; then
 		compile "$cpu" sketch "$SCRIPT_DIR/sketch.cpp" "$OUT/$cpu/sketch/sketch.o" \
 			-DARDUINO=10819 -I"$SCRIPT_DIR/include" -I"$ROOT/src"
+		# 4. the example that talks to the hub's own channels (remote(), remoteAction(), remoteEvent())
+		compile "$cpu" thermostat "$ROOT/examples/Thermostat/Thermostat.ino" "$OUT/$cpu/sketch/Thermostat.o" \
+			-x c++ -DARDUINO=10819 -I"$SCRIPT_DIR/include" -I"$ROOT/src"
 	fi
 done
 

@@ -10,7 +10,6 @@ HubLink hubLink;
 
 namespace {
 const uint16_t kHubGiveUpMs = (uint16_t)HUBWIRE_HUB_RETRY_MS * HUBWIRE_HUB_TRIES;
-const uint8_t kBindVersion = 1;
 
 void readFlash(void* to, const void* from, size_t n) {
 #if defined(__AVR__)
@@ -30,6 +29,7 @@ void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len) {
 // frame: the frame just received (true when it was the hub link's); else time to send and retry.
 bool hubDispatch(Session& s, bool frame) {
   if (!s.hubMine()) return false;
+  s.hubSessionCheck();
   if (frame) return s.hubFrame(s.rx_.frame());
   s.hubPoll(s.ms());
   return false;
@@ -49,26 +49,24 @@ bool Session::hubMine() {
   return true;
 }
 
+// A new hub session (the session took a new hub nonce): the hub binds again and numbers its events
+// afresh.
+void Session::hubSessionCheck() {
+  HubLink& l = hubLink;
+  if (!hubKnown_ || (l.hubKnown && hubNonce_ == l.hubNonce)) return;
+  l.hubKnown = true;
+  l.hubNonce = hubNonce_;
+  l.bound = false;
+  l.bind.state = kBindPending;
+  l.eventValid = false;
+  l.controlValid = false;
+}
+
 // True when the frame was the hub link's to handle; false lets the session handle it as before.
 bool Session::hubFrame(const Frame& f) {
   HubLink& l = hubLink;
   const uint8_t* p = f.payload;
   switch (f.type) {
-    case kMsgHello:
-      if (f.len >= kHelloSize && p[0] == kProtocolVersion && !(p[1] & kHelloDevice)) {
-        l.hubHash = loadU32(p + 10);
-        l.hubLength = loadU16(p + 14);
-        uint32_t nonce = loadU32(p + 2);
-        if (!l.hubKnown || nonce != l.hubNonce) {  // a new hub session: bind again, events afresh
-          l.hubKnown = true;
-          l.hubNonce = nonce;
-          l.bound = false;
-          l.bind.state = kBindPending;
-          l.eventValid = false;
-          l.controlValid = false;
-        }
-      }
-      return false;
     case kMsgHeartbeat:
       if (f.len >= kHeartbeatSize) {
         ++l.health.beats;
@@ -98,7 +96,7 @@ bool Session::hubFrame(const Frame& f) {
       return true;
     case kMsgControl:  // about to be answered (linked): the bind report, or a control to remember
       if (f.id == 0) return hubBind(f), true;
-      l.controlValid = true;  // (its payload may be the answer by now: only seq and id are read)
+      l.controlValid = true;
       l.controlSeq = f.seq;
       l.controlId = f.id;
       return false;
@@ -155,11 +153,12 @@ void Session::hubEvent(const Frame& f) {
 }
 
 // The bind report: [version, status of hub id 1..N]. A control like any other: its answer is kept,
-// so that a retry of it is answered again and not applied twice (session.cpp, handle()).
+// so that a retry of it is answered again and not applied twice (session.cpp, handle()). Byte 0
+// is not read: by the time the hook runs the session has written its NAK there (one buffer), and
+// the length already tells this report from another layout.
 void Session::hubBind(const Frame& f) {
   HubLink& l = hubLink;
-  uint8_t code = f.len != 1 + l.count ? (uint8_t)kErrBadLength
-               : f.payload[0] != kBindVersion ? (uint8_t)kErrBadValue : (uint8_t)kOk;
+  uint8_t code = f.len != 1 + l.count ? (uint8_t)kErrBadLength : (uint8_t)kOk;
   l.controlValid = false;
   replyType_ = code == kOk ? kMsgAck : kMsgNak;
   replyLen_ = code == kOk ? 0 : 1;
@@ -184,14 +183,21 @@ void Session::hubPoll(uint16_t now) {
   HubLink& l = hubLink;
   // Events and the device's R, C, J take their seq from one counter: a head event about to be sent
   // for the first time (later in this update()) takes the next one.
-  if (events_.size() && !events_.inFlight() && (uint8_t)(events_.seq() + 1) != l.counter)
+  if (!events_.size() || events_.inFlight()) {
+    l.eventNumbered = false;
+  } else if (!l.eventNumbered) {
     events_.nextSeqIs(++l.counter);
+    l.eventNumbered = true;
+  }
   while (l.queued) {
     HubLink::Entry& e = l.queue[l.head];
     bool canSend = linked_ && l.bound;
     bool giveUp;
     if (!e.tries) {
-      if (canSend) l.headSeq = ++l.counter;
+      if (canSend) {
+        l.headSeq = ++l.counter;
+        l.eventNumbered = false;  // an event not sent yet takes a seq after this one
+      }
       giveUp = !canSend && (uint16_t)(now - e.at) >= kHubGiveUpMs;
     } else {
       if ((uint16_t)(now - e.at) < HUBWIRE_HUB_RETRY_MS) return;

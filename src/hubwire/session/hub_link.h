@@ -72,7 +72,8 @@ class HubLink {
   uint8_t head, queued;
   uint8_t counter;  // the device's transaction counter: its events and its R, C, J
   uint8_t headSeq;
-  bool hubKnown;    // hubNonce: the hub session the link last saw
+  bool eventNumbered;  // the head event, not sent yet, has its seq from counter
+  bool hubKnown;    // hubNonce: the hub session the link last saw (the session's, copied)
   uint32_t hubNonce;
   bool bound;       // the bind report of this hub session has arrived
   bool controlValid;  // controlSeq/Id: the hub's last control, which a hub chunk answer must not
@@ -81,8 +82,6 @@ class HubLink {
   uint8_t eventSeq, eventId;
   BindStatus bind;
   HubHealth health;
-  uint32_t hubHash;  // the hub's descriptor, as its hello names it
-  uint16_t hubLength;
 };
 
 // The program's one hub link (hub_link.cpp); zero until a session with hub channels begins.

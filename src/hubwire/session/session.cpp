@@ -131,12 +131,11 @@ void Session::handle(const Frame& f) {
   lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
-      hubHook(*this, true);  // the hub link notes the hub's session and descriptor (hub_link.cpp)
       onHello(f);
       return;
     case kMsgHeartbeat:
-      hubHook(*this, true);  // ... and its health
       if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      else hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
     case kMsgNak:
@@ -302,12 +301,11 @@ void Session::onControl(const Frame& f) {
     }
   }
   if (code != kOk) {
-    if (f.id == 0 && hubHook(*this, true)) return;  // the bind report (hub_link.cpp)
     type = kMsgNak;
     len = 1;
     tx_.payload()[0] = code;
   }
-  hubHook(*this, true);  // the hub link notes every control
+  if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
   memcpy(replyData_, tx_.payload(), len);

@@ -197,16 +197,13 @@ class Session : private SessionState {
   /// Requests, writes and calls not yet answered.
   ///   if (hub.hubQueued() == HUBWIRE_HUB_QUEUE) { /* full */ }
   uint8_t hubQueued() const { return hubLink.queued; }
-  /// The hub's descriptor hash and length, as its hello gives them (0 for a hub that has none).
-  ///   if (hub.hubDescriptorHash() != lastHash) hub.readHubDescriptor(0, gotChunk);
-  uint32_t hubDescriptorHash() const { return hubLink.hubHash; }
-  uint16_t hubDescriptorLength() const { return hubLink.hubLength; }
 
 
  private:
   // The hub's own channels (hub_link.cpp), reached only through the sketch's hub table.
   friend bool hubDispatch(Session& s, bool frame);
   bool hubMine();
+  void hubSessionCheck();
   bool hubQueue(uint8_t type, const void* var, HubDone done, HubFail fail);
   bool hubCall(const void* handle, const void* arg, uint8_t len, HubDone done, HubFail fail, HubDeliver deliver);
   HubLink::Entry* hubPush(uint8_t id, uint8_t type, HubDone done, HubFail fail);
