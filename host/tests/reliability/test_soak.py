@@ -74,7 +74,7 @@ def test_the_per_boot_check_sees_a_write_applied_twice_and_a_lost_one() -> None:
 
     boot = {"tokens_sent": 10, "first_sent": 1, "last_sent": 10, "acked": 9, "timeouts": 1, "link_lost_errors": 0,
             "device": {"tokens_applied": 10, "twice": 0, "gaps": 0, "first_token": 1, "last_token": 10},
-            "events_queued": 4, "selftest_timeouts": 0, "events_delivered": 4, "event_seq_not_forward": 0,
+            "events_queued": 4, "selftest_timeouts": 0, "events_delivered": 4, "event_seq_repeated": 0,
             "event_order_ok": True}
     assert check_segment(0, boot) == []
     twice = dict(boot, device=dict(boot["device"], tokens_applied=11, twice=1))
