@@ -58,7 +58,7 @@ read -r bf bs _ < <(size_of extras/bench/SerialEcho)
   echo "Hub channels (examples/Thermostat: remote() read and written, remoteAction(), remoteEvent(), with"
   echo "their calls) over extras/bench/ThermostatLocal (the same sketch without them): flash $tf - $lf ="
   echo "+$((tf - lf)) B, static SRAM $ts - $ls = +$((ts - ls)) B (the hub link: queue of HUBWIRE_HUB_QUEUE"
-  echo "requests, bind status, health). A sketch that declares no hub channel pays nothing: every other"
-  echo "example has the same flash and SRAM as before the hub channels existed."
+  echo "requests, bind status, health). A sketch that declares no hub channel links none of the hub link"
+  echo "(no code of session/hub_link.cpp, none of its RAM)."
 } > bench/FOOTPRINT.md
 cat bench/FOOTPRINT.md

@@ -86,6 +86,10 @@ void actVoid(uint16_t v) { calls += v & 1; }
 int32_t noArg() { return (int32_t)++calls; }
 void plain() { ++calls; }
 
+}  // namespace
+
+// At file scope, as in a sketch: the declarations specialise a template of the global namespace,
+// which clang allows only from a namespace that encloses it.
 HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   expose("b", vBool).writable().failsafe(0).onChange(changed),
   expose("u8", vU8).writable().streamable().range(0, 200).unit("x"),
@@ -108,6 +112,8 @@ HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   event("bump", evBool),
   event("count", evU16),
   event("level", evF32));
+
+namespace {
 
 void resetState() {
   vBool = false;

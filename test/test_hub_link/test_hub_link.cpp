@@ -52,6 +52,9 @@ HUBWIRE_CHANNELS(thermo, "thermo",
   remoteAction("dock", dock),                   // hub id 3
   remoteEvent("mode", mode).onChange(modeChanged));  // hub id 4
 
+uint8_t plainLevel;
+HUBWIRE_CHANNELS(plain, "plain", expose("level", plainLevel));  // no hub channels
+
 namespace {
 
 const char kExpected[] =
@@ -376,6 +379,49 @@ TEST_F(HubLinkTest, HubHealthFromItsHeartbeats) {
   EXPECT_EQ(h.crc, 4);
   EXPECT_EQ(h.overflow, 5);
   EXPECT_EQ(h.dropped, 6);
+}
+
+// The link is lost only after HUBWIRE_LOST_AFTER_BEATS silent heartbeats, longer than a request's
+// tries last: a write in flight ends in a timeout, sent no more while the link is down.
+TEST_F(HubLinkTest, AWriteInFlightWhenTheLinkDropsEndsInOneTimeout) {
+  static_assert(250 * HUBWIRE_LOST_AFTER_BEATS >= HUBWIRE_HUB_RETRY_MS * HUBWIRE_HUB_TRIES, "defaults");
+  link();
+  bind({0, 0, 0, 0});
+  device.write(report, done, fail);
+  ASSERT_EQ(only(step(), kMsgControl).size(), 1u);
+  size_t sent = 0;
+  for (int t = 0; t < 250 * HUBWIRE_LOST_AFTER_BEATS; t += HUBWIRE_HUB_RETRY_MS)
+    sent += only(step(HUBWIRE_HUB_RETRY_MS), kMsgControl).size();
+  EXPECT_FALSE(device.linked());
+  EXPECT_EQ(sent, (size_t)HUBWIRE_HUB_TRIES - 1);
+  EXPECT_EQ(failCalls, 1);
+  EXPECT_EQ(lastFail, kHubTimeout);
+  link();
+  EXPECT_TRUE(only(step(HUBWIRE_HUB_RETRY_MS), kMsgControl).empty());
+  EXPECT_EQ(doneCalls + failCalls, 1);  // exactly one ending
+}
+
+// A session whose table declares no hub channel, in the same program, behaves as before: a bind
+// report is an unknown channel, a hub event an unknown type, and it cannot request anything.
+TEST(NoHubChannels, ASessionWithoutThemAnswersAsBefore) {
+  FakeStream stream;
+  FakeClock clock;
+  Port port{stream, clock};
+  Session device{port};
+  ASSERT_TRUE(device.begin(plain, 1));
+  sendFrame(stream, kMsgHello, 0, 0, hubHello(3));
+  device.update();
+  drain(stream);
+  sendFrame(stream, kMsgControl, 9, 0, Bytes{1, 0});
+  sendFrame(stream, kMsgEvent, 10, 1, Bytes{1});
+  device.update();
+  auto out = drain(stream);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0].type, kMsgNak);
+  EXPECT_EQ(out[0].payload, Bytes{kErrUnknownChannel});
+  EXPECT_EQ(out[1].type, kMsgNak);
+  EXPECT_EQ(out[1].payload, Bytes{kErrUnknownType});
+  EXPECT_FALSE(device.request(plainLevel));
 }
 
 // test/vectors/both/frames.json: every frame encodes to its wire bytes; the device's answers to the

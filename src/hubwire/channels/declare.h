@@ -19,6 +19,14 @@
 #include "tables.h"
 #include "hub_table.h"
 
+// The <false, tag> specialisations below exist only to keep the macro's text the same for every
+// sketch: nothing reads them.
+#if defined(__GNUC__)
+#define HUBWIRE_UNUSED __attribute__((unused))
+#else
+#define HUBWIRE_UNUSED
+#endif
+
 /// Declares a sketch's channels at file scope; `var` is then what begin() takes. After the device:
 /// expose(), control(), action() and event() (dsl.h), with their options, and what the sketch
 /// expects of the hub: remote(), remoteAction() and remoteEvent() (remote.h).
@@ -35,13 +43,14 @@
   template <>                                                                                      \
   const ::hubwire::HubTable* const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),    \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
-                      hubwire_channels_##var::Tag>::type>::table =                                 \
+                      hubwire_channels_##var::Tag>::type>::table HUBWIRE_UNUSED =                  \
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
                                      &hubwire_channels_##var::declared>::get();                    \
   template <>                                                                                      \
   bool (*const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                        \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
-                      hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, bool) =  \
+                      hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, bool)    \
+      HUBWIRE_UNUSED =                                                                             \
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
                                      &hubwire_channels_##var::declared>::dispatch();               \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \

@@ -14,6 +14,9 @@
 //
 // They become the descriptor's "hub" list (hub ids 1..N in declaration order, docs/PROTOCOL.md 10)
 // and a flash table the session reads (hub_table.h). A sketch that declares none pays nothing.
+// Limits: one table with hub channels in a program, declared at file scope, next to at least one
+// channel of the sketch's own (begin() refuses a table without one); values written or passed to
+// an action fit HUBWIRE_HUB_MAX_VALUE bytes (a compile error says so).
 #ifndef HUBWIRE_CHANNELS_REMOTE_H
 #define HUBWIRE_CHANNELS_REMOTE_H
 
