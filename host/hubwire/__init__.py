@@ -5,17 +5,18 @@ asyncio flavour. Both run on the same session core (:mod:`hubwire.session`).
 """
 from __future__ import annotations
 
-from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, NakError, NoDeviceFound,
+from .errors import (DescriptorError, HubChannelError, HubwireError, InvalidValue, LinkLost, NakError, NoDeviceFound,
                      ProtocolVersionError, StreamEnded, Timeout)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "HubwireError", "Timeout", "NakError", "DescriptorError", "LinkLost", "ProtocolVersionError",
-    "NoDeviceFound", "InvalidValue", "StreamEnded", "__version__",
+    "NoDeviceFound", "InvalidValue", "StreamEnded", "HubChannelError", "__version__",
 ]
 
 from .descriptor import Channel, Descriptor, parse_descriptor  # noqa: E402
+from .hub import HubChannel, HubChannels  # noqa: E402
 from .device import Device, EventStream, Stream, connect, find_port  # noqa: E402
 from .session import LinkHealth, ReceivedEvent, Session, State, Stats, StreamSample  # noqa: E402
 from .transport import SerialTransport, Transport  # noqa: E402
@@ -23,4 +24,4 @@ from . import aio  # noqa: E402
 
 __all__ += ["connect", "find_port", "Device", "Stream", "EventStream", "Session", "State", "ReceivedEvent",
             "StreamSample", "LinkHealth", "Stats", "Channel", "Descriptor", "parse_descriptor", "Transport",
-            "SerialTransport", "aio"]
+            "SerialTransport", "aio", "HubChannels", "HubChannel"]

@@ -26,8 +26,10 @@ from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optio
 from . import ops
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, NakError, Timeout
+from .hub_face import HubMethods
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
 from .session.events import EventSink
+from .session.hub_channels import HubSide
 from .session.runner import LoopDispatcher
 from .text import clip
 from .transport import Transport
@@ -43,7 +45,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 
     Keyword arguments as :func:`hubwire.connect`: ``heartbeat_ms``, ``retry_timeout``, ``tries``,
     ``cache_dir``, ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``,
-    ``serial_kwargs``.
+    ``serial_kwargs``, ``hub`` (hub channels; handlers may be coroutines, run on this loop).
     """
     if transport is None:
         from .service.route import RoutedConnecting  # through hubwire serve where it applies
@@ -86,12 +88,27 @@ class _Connecting:
             await self._dev.close()
 
 
-class AsyncDevice:
+class AsyncDevice(HubMethods):
     """A connected device for asyncio code: ``await dev.read(name)``, ``await dev.write(name, v)``,
-    ``await dev.call(name, arg)``, ``dev.stream(name, hz=...)``, ``dev.events(...)``, ``dev.on(...)``."""
+    ``await dev.call(name, arg)``, ``dev.stream(name, hz=...)``, ``dev.events(...)``, ``dev.on(...)``;
+    hub channels as on :class:`hubwire.Device` (``dev.provide``, ``dev.action``, ``dev.notify``...)."""
 
     def __init__(self, core: SessionCore) -> None:
         self._core = core
+
+    def _hub_side(self) -> HubSide:
+        return self._core.hub
+
+    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once every hub event queued with :meth:`notify` was acknowledged by the device;
+        :class:`hubwire.Timeout` after ``timeout`` s (None: no limit)."""
+        core = self._core
+        end = None if timeout is None else core.loop.time() + timeout
+        while core.hub.queue and not core.closed:
+            left = 3600.0 if end is None else end - core.loop.time()
+            if left <= 0:
+                raise Timeout(f"{len(core.hub.queue)} hub events still wait for the device after {timeout} s")
+            await core.changes(left)
 
     @property
     def core(self) -> SessionCore:

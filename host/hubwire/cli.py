@@ -10,7 +10,7 @@ from typing import Any, Optional, Sequence
 from . import __version__, diagnose
 from .cli_support import (CliError, channel, channel_json, fmt_value, jsonable, open_device, print_json)
 from .cli_watch import cmd_watch, watch_duration
-from .device import KNOWN_USB_VIDS
+from .device import channel_table, KNOWN_USB_VIDS
 from .errors import HubwireError, NakError
 
 __all__ = ["main", "build_parser", "watch_duration"]
@@ -45,11 +45,15 @@ def cmd_info(args: argparse.Namespace) -> int:
         if args.json:
             print_json({"url": dev.session.url, "name": d.name, "firmware": d.firmware, "protocol": d.protocol,
                          "descriptor_hash": f"{d.hash:08x}", "descriptor_length": len(d.raw),
-                         "channels": [channel_json(c) for c in d.channels]})
+                         "channels": [channel_json(c) for c in d.channels],
+                         "hub": [channel_json(c) for c in d.hub]})
         else:
             print(f"{d.name}{' ' + d.firmware if d.firmware else ''} on {dev.session.url} "
                   f"(descriptor {len(d.raw)} bytes, hash {d.hash:08x})")
             print(dev.table())
+            if d.hub:
+                print(f"\nhub channels {d.name} uses (id: hub id; access: what the board does with it):")
+                print(channel_table(d, hub=True))
     return 0
 
 

@@ -18,6 +18,7 @@ def _health_line(dev: Device) -> Dict[str, Any]:
     h = dev.health()
     return {"state": h.state,
             "heartbeat_age_ms": None if h.heartbeat_age is None else round(h.heartbeat_age * 1000),
+            "measured_heartbeat_ms": h.measured_heartbeat_ms,  # the device's own, from its heartbeats
             "hub_errors": h.hub_counters, "device_errors": h.device_counters}
 
 
@@ -86,6 +87,7 @@ def _watch(dev: Device, evs: Any, args: argparse.Namespace, tty: bool, start: fl
         else:
             print(f"t={t:.3f} " + " ".join(f"{k}={fmt_value(v)}" for k, v in values.items()), flush=True)
             print(f"t={t:.3f} link state={health['state']} heartbeat_age_ms={health['heartbeat_age_ms']} "
+                  f"measured_heartbeat_ms={health['measured_heartbeat_ms']} "
                   f"hub_errors={_fmt_counters(health['hub_errors'])} "
                   f"device_errors={_fmt_counters(health['device_errors'])}", flush=True)
         down_since = None if health["state"] == "ready" else (down_since or time.monotonic())
@@ -138,7 +140,8 @@ def _draw(dev: Device, readable: Sequence[Any], values: Dict[str, Any], events: 
           t: float) -> None:
     d = dev.descriptor
     lines = [f"{d.name}{' ' + d.firmware if d.firmware else ''} on {dev.session.url}   t={t:.1f}s   "
-             f"link {health['state']}, heartbeat {health['heartbeat_age_ms']} ms ago", ""]
+             f"link {health['state']}, heartbeat {health['heartbeat_age_ms']} ms ago, "
+             f"every {health['measured_heartbeat_ms']} ms", ""]
     w = max((len(c.name) for c in readable), default=4)
     for c in readable:
         unit = f" {c.unit}" if c.unit else ""

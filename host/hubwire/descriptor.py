@@ -24,7 +24,7 @@ MAX_DEPTH = 5
 NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 NAME_MAX = 32
 ACCESS_LETTERS = "rwces"
-TOP_KEYS = {"p", "n", "fw", "ch"}
+TOP_KEYS = {"p", "n", "fw", "ch", "hub"}
 CHANNEL_KEYS = {"id", "n", "a", "t", "c", "f", "rt", "rc", "u", "min", "max", "fs", "d"}
 FIELD_KEYS = {"n", "t", "c"}
 
@@ -111,7 +111,11 @@ def _fmt(x: Optional[float]) -> str:
 
 @dataclass(frozen=True)
 class Descriptor:
-    """A parsed descriptor: device ``name``, ``firmware`` and its ``channels`` (in declaration order)."""
+    """A parsed descriptor: device ``name``, ``firmware`` and its ``channels`` (in declaration order).
+
+    ``hub`` lists the hub channels the device uses (key ``"hub"``), their ``id`` being the hub id
+    (1..N in order) and their access the device's own: ``r`` it reads, ``w`` writes, ``c`` calls,
+    ``e`` receives events."""
 
     protocol: int
     name: str
@@ -119,6 +123,7 @@ class Descriptor:
     channels: Tuple[Channel, ...]
     raw: bytes = field(repr=False)
     hash: int = 0
+    hub: Tuple[Channel, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_by_id", {c.id: c for c in self.channels})

@@ -252,17 +252,19 @@ def _failsafe(where: str, ch: Mapping[str, Any], a: str, codec: Codec, type_obj:
         raise _fail(where, f"failsafe 'fs' {clip_json(raw_fs)} does not fit {codec.name}: {e}") from None
 
 
-def _parse_channel(i: int, ch: Any) -> Channel:
-    where = f"ch[{i}]"
+def _parse_channel(i: int, ch: Any, key: str = "ch") -> Channel:
+    where = f"{key}[{i}]"
     _object(where, ch, CHANNEL_KEYS, "channel")
     name = _name(where, ch, "channel")
-    where = f"ch[{i}] ({clip(name)})"
+    where = f"{key}[{i}] ({clip(name)})"
     if "id" not in ch:
         raise _fail(where, "channel has no 'id'")
     cid = ch["id"]
     if not _is_int(cid) or not 1 <= cid <= 255:
         raise _fail(where, f"'id' must be an integer 1..255, got {clip_json(cid)}")
     a = _access(where, ch)
+    if key == "hub" and "s" in a:
+        raise _fail(where, f"access {clip(a)}: a hub channel is not streamable")
     type_obj, codec, returns = _channel_type(where, ch, name, a)
     unit = _text(where, ch, "u", "unit")
     desc = _text(where, ch, "d", "description")
@@ -302,7 +304,7 @@ def parse_descriptor(data: Union[bytes, bytearray, str]) -> Descriptor:
         raise _fail("", f"must be a JSON object, got {type(doc).__name__}")
     extra = set(doc) - TOP_KEYS
     if extra:
-        raise _fail("", f"unknown top-level key(s) {clip_list(sorted(map(clip, extra)))} (allowed: p, n, fw, ch)")
+        raise _fail("", f"unknown top-level key(s) {clip_list(sorted(map(clip, extra)))} (allowed: p, n, fw, ch, hub)")
     p = doc.get("p")
     if not _is_int(p):
         raise _fail("", f"protocol version 'p' must be an integer, got {clip_json(p)}")
@@ -314,19 +316,28 @@ def parse_descriptor(data: Union[bytes, bytearray, str]) -> Descriptor:
     fw = doc.get("fw")
     if fw is not None and not isinstance(fw, str):
         raise _fail("", f"firmware version 'fw' must be a string, got {clip_json(fw)}")
-    chs = doc.get("ch")
+    channels = _channel_list(doc, "ch")
+    hub = _channel_list(doc, "hub") if "hub" in doc else ()
+    return Descriptor(protocol=p, name=name, firmware=fw, channels=channels, raw=raw, hash=fnv1a32(raw), hub=hub)
+
+
+def _channel_list(doc: Mapping[str, Any], key: str) -> Tuple[Channel, ...]:
+    """The channels under ``key``: "ch" (ids unique), or "hub" (hub ids 1..N in order)."""
+    chs = doc.get(key)
     if not isinstance(chs, list):
-        raise _fail("", f"channels 'ch' must be a list, got {clip_json(chs)}")
+        raise _fail("", f"channels '{key}' must be a list, got {clip_json(chs)}")
     channels: List[Channel] = []
     ids: Dict[int, str] = {}
     names: Dict[str, int] = {}
     for i, ch in enumerate(chs):
-        c = _parse_channel(i, ch)
+        c = _parse_channel(i, ch, key)
+        if key == "hub" and c.id != i + 1:
+            raise _fail(f"hub[{i}] ({clip(c.name)})", f"hub id must be {i + 1} (1..N in order), got {c.id}")
         if c.id in ids:
-            raise _fail(f"ch[{i}] ({clip(c.name)})", f"duplicate channel id {c.id} (also used by {clip(ids[c.id])})")
+            raise _fail(f"{key}[{i}] ({clip(c.name)})", f"duplicate channel id {c.id} (also used by {clip(ids[c.id])})")
         if c.name in names:
-            raise _fail(f"ch[{i}]", f"duplicate channel name {clip(c.name)} (ids {names[c.name]} and {c.id})")
+            raise _fail(f"{key}[{i}]", f"duplicate channel name {clip(c.name)} (ids {names[c.name]} and {c.id})")
         ids[c.id] = c.name
         names[c.name] = c.id
         channels.append(c)
-    return Descriptor(protocol=p, name=name, firmware=fw, channels=tuple(channels), raw=raw, hash=fnv1a32(raw))
+    return tuple(channels)

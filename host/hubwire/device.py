@@ -5,10 +5,12 @@ from typing import Any, Callable, List, Optional, Tuple, cast
 
 from . import ops
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError, NakError
+from .errors import HubwireError, NakError, Timeout
+from .hub_face import HubMethods
 from .iterators import EventStream, Stream
 from .ports import KNOWN_USB_VIDS, find_port
 from .session import LinkHealth, Session
+from .session.hub_channels import HubSide
 from .text import clip, clip_list, show
 from .transport import Transport
 from .wire import messages as m
@@ -24,7 +26,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 
     ``timeout`` is the connect deadline in seconds. Other keyword arguments go to
     :class:`hubwire.session.Session` (``heartbeat_ms``, ``retry_timeout``, ``tries``, ``cache_dir``,
-    ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``).
+    ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``) and
+    ``hub``: a :class:`hubwire.HubChannels` the device may use; a hub channel the device expects
+    that it lacks, or declares with another type or access, raises :class:`HubChannelError` here.
 
     With ``hubwire serve`` running, a board name (``connect("rover")``), a port the service owns, or
     no URL with one board served reach the board through the service (docs/SERVICE.md).
@@ -58,10 +62,10 @@ def _fmt_num(x: Any) -> str:
 ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
 
 
-def channel_table(desc: Descriptor) -> str:
-    """The channel table of a descriptor as text."""
+def channel_table(desc: Descriptor, hub: bool = False) -> str:
+    """The channel table of a descriptor as text (``hub``: of the hub channels the device uses)."""
     rows = [("id", "name", "type", "access", "unit", "range", "failsafe", "description")]
-    for c in desc.channels:
+    for c in desc.hub if hub else desc.channels:
         rng = ""
         if c.min is not None or c.max is not None:
             rng = f"{_fmt_num(c.min) or '*'}..{_fmt_num(c.max) or '*'}"
@@ -73,7 +77,7 @@ def channel_table(desc: Descriptor) -> str:
     return "\n".join(lines)
 
 
-class Device:
+class Device(HubMethods):
     """A connected device: its channels as items, and as attributes where the name is free.
 
     - ``dev["left"]`` / ``dev.left`` reads a readable channel;
@@ -82,7 +86,9 @@ class Device:
     - ``dev.beep(200)`` / ``dev["beep"](200)`` calls a callable channel and returns its result;
     - ``dev.read(name)``, ``dev.write(name, value)``, ``dev.call(name, arg)`` do the same by name;
     - ``dev.on("bumper", callback)``, ``dev.events()``, ``dev.stream("imu", hz=50)``;
-    - ``print(dev.table())`` shows the table of channels.
+    - ``print(dev.table())`` shows the table of channels;
+    - the other direction: ``dev.provide``, ``dev.accept``, ``dev.action``, ``dev.event`` declare
+      hub channels the device may use, ``dev.notify(name, value)`` sends it a hub event.
 
     Methods and properties of this class always win: a channel called ``close``, ``read``,
     ``session``, ``name`` or ``__class__`` never hides or replaces one. Reach it with ``dev["close"]``
@@ -101,6 +107,17 @@ class Device:
     def session(self) -> Session:
         """The underlying :class:`hubwire.session.Session`."""
         return self._session
+
+    def _hub_side(self) -> HubSide:
+        return self._session.core.hub
+
+    def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once every hub event queued with :meth:`notify` was acknowledged by the device
+        (before closing, say); :class:`hubwire.Timeout` after ``timeout`` s (None: no limit)."""
+        core = self._session.core
+        with core.sync_cv:
+            if not core.sync_cv.wait_for(lambda: not core.hub.queue or core.closed, timeout):
+                raise Timeout(f"{len(core.hub.queue)} hub events still wait for the device after {timeout} s")
 
     def _desc(self) -> Descriptor:
         d = self._session.descriptor

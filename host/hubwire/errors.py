@@ -41,6 +41,11 @@ class DescriptorError(HubwireError, ValueError):
     """The device's descriptor is not valid JSON or does not match the descriptor schema."""
 
 
+class HubChannelError(HubwireError, ValueError):
+    """A hub channel declaration is invalid, or does not match what the connected device expects
+    (a name it uses that the hub does not offer, another type or access)."""
+
+
 class InvalidValue(HubwireError, ValueError):
     """A value does not fit a channel's type (encoding) or a payload does not decode.
 

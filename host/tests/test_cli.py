@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -59,6 +60,9 @@ def test_watch_plain_lines_ends_by_itself(emulator: Emulator, cache_dir: str) ->
     health = [ln for ln in lines if " link state=ready" in ln]
     assert len(values) >= 4 and len(health) == len(values)
     assert "heartbeat_age_ms=" in health[-1] and "hub_errors=crc:0" in health[-1]
+    # the device's own measure of its heartbeat interval: never under the 250 ms it announced
+    beat = int(re.search(r"measured_heartbeat_ms=(\d+)", health[-1]).group(1))  # type: ignore[union-attr]
+    assert beat >= 250
     assert took < 10
 
 
@@ -73,6 +77,7 @@ def test_watch_json_shows_events(emulator: Emulator, cache_dir: str) -> None:
     out, err = p.communicate(timeout=20)
     recs: List[Any] = [json.loads(x) for x in out.splitlines()]
     assert p.returncode == 0, err
+    assert [r for r in recs if "link" in r][-1]["link"]["measured_heartbeat_ms"] >= 250  # measured by the device
     assert {"event": "bumper", "value": True} in [{k: r[k] for k in ("event", "value")} for r in recs if "event" in r]
 
 

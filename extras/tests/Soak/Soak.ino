@@ -6,6 +6,12 @@
 // above the last one applied means a write was applied twice (or out of order): `twice`. Tokens
 // skipped between two applied ones were never applied (a write that timed out): `gaps`. The hub's
 // check needs no inference: twice must be 0 and applied + never applied must equal what it sent.
+//
+// The other direction (the hub's channels): while the hub sets `hub_load`, the sketch writes
+// strictly increasing tokens into the hub's `tally` and calls the hub's `bump` with every 4th (the
+// hub returns it + 1), one request at a time, every 20 ms; the hub sends strictly increasing `tick`
+// events. The sketch counts what became of each: acked or failed, right or wrong answers, ticks
+// applied twice or skipped.
 #include <Hubwire.h>
 
 Hubwire hub(Serial);
@@ -26,7 +32,48 @@ uint32_t tokensApplied;  // onChange calls for token
 uint32_t twice;          // tokens not above the last applied one: applied twice or out of order
 uint32_t gaps;           // tokens skipped between two applied ones
 
+bool hubLoad;             // set by the hub: drive the hub's channels
+uint32_t tallyToken;      // the last token written to the hub's tally (1, 2, 3, ... per boot)
+uint32_t tallyAcked, tallyFailed;
+hubwire::RemoteAction<uint32_t(uint32_t)> bump;
+uint32_t bumpArg, bumpOk, bumpWrong, bumpFailed;
+uint32_t tick;            // the hub's events: strictly increasing
+uint32_t ticks, tickFirst, tickLast, tickTwice, tickGaps;
+uint8_t lastHubFailure;
+uint8_t hubQueuedNow;     // hub.hubQueued() as of the last loop(): 0 once every request ended
+uint32_t hubAt;
+
 void countWrite() { ++applied; }
+
+void tallyDone() { ++tallyAcked; }
+void tallyFail(uint8_t code) { ++tallyFailed; lastHubFailure = code; }
+void bumped(uint32_t r) { if (r == bumpArg + 1) ++bumpOk; else ++bumpWrong; }
+void bumpFail(uint8_t code) { ++bumpFailed; lastHubFailure = code; }
+
+void tickChanged() {
+  ++ticks;
+  if (tickLast == 0) {
+    tickFirst = tick;
+  } else if (tick <= tickLast) {
+    ++tickTwice;
+    return;
+  } else {
+    tickGaps += tick - tickLast - 1;
+  }
+  tickLast = tick;
+}
+
+// One device request at a time (the queue empty), so every token's fate is known on its own.
+void driveHub() {
+  if (!hubLoad || !hub.hubBinding().ok() || hub.hubQueued() != 0 || millis() - hubAt < 20) return;
+  hubAt = millis();
+  ++tallyToken;
+  hub.write(tallyToken, tallyDone, tallyFail);
+  if (tallyToken % 4 == 0) {
+    bumpArg = tallyToken;
+    hub.call(bump, bumpArg, bumped, bumpFail);
+  }
+}
 
 void tokenChanged() {
   ++tokensApplied;
@@ -69,7 +116,24 @@ HUBWIRE_CHANNELS(channels, device("soak").firmware("1.0.0"),
   expose("first_token", firstToken),
   expose("tokens_applied", tokensApplied),
   expose("twice", twice),
-  expose("gaps", gaps));
+  expose("gaps", gaps),
+  expose("hub_load", hubLoad).writable(),
+  expose("hub_queued_now", hubQueuedNow),
+  expose("tally_token", tallyToken),
+  expose("tally_acked", tallyAcked),
+  expose("tally_failed", tallyFailed),
+  expose("bump_ok", bumpOk),
+  expose("bump_wrong", bumpWrong),
+  expose("bump_failed", bumpFailed),
+  expose("ticks", ticks),
+  expose("tick_first", tickFirst),
+  expose("tick_last", tickLast),
+  expose("tick_twice", tickTwice),
+  expose("tick_gaps", tickGaps),
+  expose("last_hub_failure", lastHubFailure),
+  remote("tally", tallyToken).writeOnly(),
+  remoteAction("bump", bump),
+  remoteEvent("tick", tick).onChange(tickChanged));
 
 // Stand-in sensors with known bounds (the soak checks every streamed sample against them).
 void readSensors() {
@@ -91,4 +155,6 @@ void loop() {
   uptime = millis();
   hub.update();
   readSensors();
+  driveHub();
+  hubQueuedNow = hub.hubQueued();
 }

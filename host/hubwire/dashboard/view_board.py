@@ -146,7 +146,7 @@ class BoardView:
 
         cells = {
             "heartbeat age": "-" if h.heartbeat_age is None else f"{h.heartbeat_age:.2f} s",
-            "device heartbeat": beat(h.device_heartbeat_ms, h.device_heartbeat_since_ms),
+            "device heartbeat": beat(h.device_heartbeat_ms, h.measured_heartbeat_ms),
             "hub heartbeat": beat(h.hub_heartbeat_ms, h.hub_heartbeat_since_ms),
             "state": h.state,
             "hub receiver": " ".join(f"{k} {v}" for k, v in h.hub_counters.items()),

@@ -5,6 +5,8 @@
 - :mod:`.transactions`: requests matched to answers, retries, stop-and-wait controls;
 - :mod:`.events`: acks, deduplication, backlog, bounded queues;
 - :mod:`.streams`: subscriptions shared by several consumers, seq gaps;
+- :mod:`.hub_channels`, :mod:`.hub_answers`: the hub's own channels (bind report, hub events, the
+  device's R / C / J);
 - :mod:`.core`: the state machine tying them together on one asyncio event loop;
 - :mod:`.facade`: :class:`Session`, the synchronous facade; :mod:`.runner`: its loop thread.
 """

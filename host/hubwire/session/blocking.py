@@ -73,12 +73,20 @@ def transact(core: Any, gate: ThreadGate, type: int, id: int, payload: bytes = b
     retry = core.retry_timeout if timeout is None else timeout / core.tries
     with gate.exclusive() if type == m.CONTROL else gate.shared():
         wait_ready(core, max(core.connect_timeout, retry * core.tries))
-        p = tx.register(type, id, payload, threaded=True)
+        if type == m.CONTROL:
+            with core.sync_cv:  # the hub's bind report is out: a round trip at most
+                while not tx.claim_control("user"):
+                    core.sync_cv.wait(retry)
         try:
-            tx.transmit(p)
-            return _answer(core, p, retry, what)
+            p = tx.register(type, id, payload, threaded=True)
+            try:
+                tx.transmit(p)
+                return _answer(core, p, retry, what)
+            finally:
+                tx.unregister(p)
         finally:
-            tx.unregister(p)
+            if type == m.CONTROL:
+                tx.release_control()
 
 
 def _answer(core: Any, p: Pending, retry: float, what: str) -> Frame:

@@ -17,12 +17,14 @@ from ..cache import DescriptorCache
 from ..descriptor import Descriptor
 from ..diagnose import PortOpenError, no_answer_message
 from ..errors import HubwireError, LinkLost, ProtocolVersionError, Timeout
+from ..hub import HubChannels
 from ..transport import Transport
 from ..wire import messages as m
 from ..wire.frame import Frame
 from ..wire.messages import NakCode
 from .discovery import Discovery
 from .events import Events
+from .hub_channels import HubSide
 from .link import HELLO_INTERVAL, HelloOutcome, Link
 from .records import LinkHealth, State, Stats
 from .streams import Streams
@@ -36,6 +38,8 @@ log = logging.getLogger("hubwire")
 DISCOVERY_RETRY = 1.0
 _ANSWERS = frozenset((m.ACK, m.NAK, m.RESPONSE, m.CHUNK))
 _NOT_LINKED = bytes((NakCode.NOT_LINKED,))
+_DEVICE_TRANSACTIONS = frozenset((m.REQUEST, m.CONTROL))
+_ACKS = frozenset((m.ACK, m.NAK))
 
 
 class SessionCore:
@@ -43,8 +47,9 @@ class SessionCore:
 
     def __init__(self, transport: Transport, *, dispatch: Any, connect_timeout: float = 5.0,
                  heartbeat_ms: int = 250, retry_timeout: float = 0.1, tries: int = 5, cache_dir: Any = None,
-                 progress: Optional[Callable[[int, int], None]] = None) -> None:
+                 progress: Optional[Callable[[int, int], None]] = None, hub: Optional[HubChannels] = None) -> None:
         self.loop = asyncio.get_running_loop()
+        self._loop_thread = threading.current_thread()
         self.url = transport.url
         self.connect_timeout = connect_timeout
         self.retry_timeout = retry_timeout
@@ -63,6 +68,9 @@ class SessionCore:
         self.link_lost_cbs: List[Callable[[], Any]] = []
         self.link_restored_cbs: List[Callable[[], Any]] = []
         self.reconnect_cbs: List[Callable[[Descriptor], Any]] = []
+        #: the hub's own channels for this device (declared beforehand: ``hub_declared``)
+        self.hub_declared = hub is not None
+        self.hub = HubSide(self, hub if hub is not None else HubChannels())
         self.link = Link(transport, self.loop, self.stats, heartbeat_ms, self)
         self.tx = Transactions(self)
         self.discovery = Discovery(self, DescriptorCache(cache_dir))
@@ -110,10 +118,15 @@ class SessionCore:
             hub_counters=link.decoder.counters(),
             device_counters={"crc": hb.crc, "overflow": hb.overflow, "dropped": hb.dropped} if hb else {},
             stats=self.stats.as_dict(),
-            device_heartbeat_since_ms=hb.since_ms if hb and hb.since_ms else None,
+            measured_heartbeat_ms=hb.since_ms if hb else None,
             hub_heartbeat_ms=link.heartbeat_ms,
             hub_heartbeat_since_ms=link.sent_since_ms or None,
         )
+
+    def hub_descriptor_id(self) -> "tuple[int, int]":
+        """FNV-1a hash and length of the hub's own descriptor, for the hub hello (0, 0: none)."""
+        raw = self.hub.channels.descriptor()
+        return (self.hub.channels.descriptor_hash(), len(raw)) if raw else (0, 0)
 
     # ---------------------------------------------------------------------------- lifecycle
 
@@ -126,6 +139,17 @@ class SessionCore:
 
     async def _changes(self, timeout: float) -> None:
         await asyncio.wait((self._changed,), timeout=max(0.0, timeout))
+
+    async def changes(self, timeout: float) -> None:
+        """Wait up to ``timeout`` s for the next state change or :meth:`wake`."""
+        await self._changes(timeout)
+
+    def wake(self) -> None:
+        """Wake what waits for a change (from any thread)."""
+        if threading.current_thread() is getattr(self, "_loop_thread", None):
+            self._notify()
+        else:
+            self.loop.call_soon_threadsafe(self._notify)
 
     async def open(self) -> None:
         """Open the transport, handshake and discover (HubwireError, Timeout, ProtocolVersionError,
@@ -168,6 +192,8 @@ class SessionCore:
             await self._changes(min(0.5, self.connect_timeout - idle))
         if self.fatal is not None:
             raise self.fatal
+        if self.hub_declared and self.descriptor is not None:
+            self.hub.check_all(self.descriptor)  # a name the device uses and the hub lacks
 
     async def close(self) -> None:
         """Cancel streams on the device, fail what waits, close the transport. Idempotent."""
@@ -182,6 +208,7 @@ class SessionCore:
         for t in (self._discovering, self._discovery_timer):
             if t is not None:
                 t.cancel()
+        self.hub.close()
         self.link.close()
         self.events.close()
         self._notify()
@@ -211,7 +238,11 @@ class SessionCore:
 
     def handle(self, f: Frame, now: float) -> None:
         t = f.type
-        if t in _ANSWERS:
+        if t in _DEVICE_TRANSACTIONS or (t == m.CHUNK and len(f.payload) == 3):
+            self.hub.answers.on_device_frame(f)  # the device asks the hub (a chunk request has 3 bytes)
+        elif t in _ANSWERS:
+            if t in _ACKS and self.hub.on_answer(f):
+                return
             if self.tx.on_answer(f) and t == m.NAK and f.payload[:1] == _NOT_LINKED:
                 # the device lost the link on its side: re-handshake (its hello reply relinks it)
                 self.stats.not_linked += 1
@@ -257,6 +288,7 @@ class SessionCore:
     def _rebooted(self) -> None:
         self.stats.reboots += 1
         self.events.last_seq = None
+        self.hub.link_down()
         self.descriptor_nonce = None  # rediscover (from the cache if the hash is known)
         self.tx.fail_all(LinkLost("device rebooted"))
         self.streams.interrupt()  # subscribed again once rediscovered
@@ -280,6 +312,7 @@ class SessionCore:
         self._notify()
         if self.state is State.READY:
             self.streams.resume()
+            self.hub.on_ready()
         self.maybe_discover()
 
     def link_down(self, why: str) -> None:
@@ -290,6 +323,7 @@ class SessionCore:
             self.state = State.LOST if self.device_hello is not None else State.CONNECTING
         exc = LinkLost(f"link to {self.url} lost ({why})")
         self.tx.fail_all(exc)
+        self.hub.link_down()
         self.streams.interrupt()  # streams ride through: subscribed again once the link is back
         self._notify()
         if was_up:
@@ -338,6 +372,7 @@ class SessionCore:
         if self.link.linked and self.state is not State.CLOSED:
             self.state = State.READY
             self.streams.resume()
+            self.hub.on_ready()
         self._notify()
         if not first:
             for cb in list(self.reconnect_cbs):

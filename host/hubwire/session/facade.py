@@ -9,6 +9,7 @@ from typing import Any, Callable, Dict, Optional
 
 from ..descriptor import Descriptor
 from ..errors import HubwireError
+from ..hub import HubChannels
 from ..transport import SerialTransport, Transport
 from ..wire import messages as m
 from ..wire.frame import Frame
@@ -32,7 +33,8 @@ class Session:
     ``heartbeat_ms`` (hub heartbeat interval), ``retry_timeout`` (s) and ``tries`` (per transaction),
     ``cache_dir`` (descriptor cache directory, ``None`` default, ``False`` disables), ``progress``
     (``callable(received, total)`` during descriptor downloads), ``on_link_lost`` /
-    ``on_link_restored`` / ``on_reconnect`` callbacks, ``serial_kwargs`` (to ``serial_for_url``).
+    ``on_link_restored`` / ``on_reconnect`` callbacks, ``serial_kwargs`` (to ``serial_for_url``),
+    ``hub`` (the :class:`hubwire.HubChannels` offered to the device).
     """
 
     def __init__(self, url: Optional[str] = None, baudrate: int = 115200, *, connect_timeout: float = 5.0,
@@ -41,7 +43,8 @@ class Session:
                  on_link_lost: Optional[Callable[[], None]] = None,
                  on_link_restored: Optional[Callable[[], None]] = None,
                  on_reconnect: Optional[Callable[[Descriptor], None]] = None,
-                 serial_kwargs: Optional[Dict[str, Any]] = None, transport: Optional[Transport] = None) -> None:
+                 serial_kwargs: Optional[Dict[str, Any]] = None, transport: Optional[Transport] = None,
+                 hub: Optional[HubChannels] = None) -> None:
         if transport is None:
             if url is None:
                 raise ValueError("Session needs a url or a transport")
@@ -49,7 +52,7 @@ class Session:
         self.transport = transport
         self.url = transport.url
         self._options = dict(connect_timeout=connect_timeout, heartbeat_ms=heartbeat_ms, retry_timeout=retry_timeout,
-                             tries=tries, cache_dir=cache_dir, progress=progress)
+                             tries=tries, cache_dir=cache_dir, progress=progress, hub=hub)
         self._initial_cbs = (on_link_lost, on_link_restored, on_reconnect)
         self._core: Optional[SessionCore] = None
         self._loop: Any = None

@@ -183,7 +183,9 @@ class Link:
     # -------------------------------------------------------------------------------- timers
 
     def send_hello(self, reply: bool) -> None:
-        h = m.Hello(m.PROTOCOL_VERSION, m.FLAG_REPLY if reply else 0, self.nonce, HUB_MAX_PAYLOAD, self.heartbeat_ms)
+        dhash, dlen = self.owner.hub_descriptor_id()  # the hub's own channels (PROTOCOL.md 10.5)
+        h = m.Hello(m.PROTOCOL_VERSION, m.FLAG_REPLY if reply else 0, self.nonce, HUB_MAX_PAYLOAD, self.heartbeat_ms,
+                    dhash, dlen)
         # a lone 00 first ends whatever noise the device may have collected (an empty frame is
         # ignored by the receiver, PROTOCOL.md 1), so this hello is not lost with it
         self.send(b"\x00" + encode_frame(m.HELLO, 0, 0, h.pack()))

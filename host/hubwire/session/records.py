@@ -68,6 +68,19 @@ class Stats:
     events_deferred: int = 0
     events_dropped: int = 0
     resubscribes: int = 0
+    # hub channels (the device reads, writes, calls the hub; the hub sends it events)
+    device_reads: int = 0
+    device_writes: int = 0
+    device_calls: int = 0
+    device_duplicates: int = 0
+    device_refused: int = 0
+    device_unanswered: int = 0
+    binds_sent: int = 0
+    bind_retries: int = 0
+    hub_events_delivered: int = 0
+    hub_events_refused: int = 0
+    hub_events_skipped: int = 0
+    hub_event_retries: int = 0
 
     def as_dict(self) -> Dict[str, int]:
         """The counters as a plain dict (a snapshot)."""
@@ -80,9 +93,9 @@ class LinkHealth:
 
     ``hub_counters`` are this hub's receiver counters (how well the hub hears the device);
     ``device_counters`` are the ones the device reported in its last heartbeat (how well it hears us).
-    Heartbeat intervals, ms: ``device_heartbeat_ms`` the device declared, ``device_heartbeat_since_ms``
-    between its last two as it measured them; ``hub_heartbeat_ms`` and ``hub_heartbeat_since_ms``
-    the same of this hub's.
+    ``device_heartbeat_ms`` is the interval the device announced, ``measured_heartbeat_ms`` the one it
+    measured: the ms since its previous heartbeat carried by its latest one (None before any).
+    ``hub_heartbeat_ms`` and ``hub_heartbeat_since_ms`` are the same of this hub's own heartbeats.
     """
 
     state: str
@@ -93,6 +106,6 @@ class LinkHealth:
     hub_counters: Dict[str, int]
     device_counters: Dict[str, int]
     stats: Dict[str, int] = field(default_factory=dict)
-    device_heartbeat_since_ms: Optional[int] = None
+    measured_heartbeat_ms: Optional[int] = None
     hub_heartbeat_ms: Optional[int] = None
     hub_heartbeat_since_ms: Optional[int] = None

@@ -152,6 +152,8 @@ class Transactions:
         self.lock = threading.Lock()
         self.gate = Gate()
         self._seq = random.randrange(256)
+        #: who has a C outstanding: "user" (the application) or "hub" (the bind report), see claim_control
+        self.control_owner: Optional[str] = None
 
     def next_seq(self) -> int:
         with self.lock:
@@ -160,6 +162,23 @@ class Transactions:
     def _next_seq(self) -> int:
         self._seq = (self._seq + 1) & 0xFF
         return self._seq
+
+    def claim_control(self, owner: str) -> bool:
+        """Take the right to have a ``C`` outstanding: the application's controls and the hub's bind
+        report never overlap, so the device's duplicate detection (last C) stays exact."""
+        with self.lock:
+            if self.control_owner is None:
+                self.control_owner = owner
+            return self.control_owner == owner
+
+    def release_control(self) -> None:
+        """Give the right back; wakes whoever waits for it (the hub's bind report, callers)."""
+        with self.lock:
+            owner, self.control_owner = self.control_owner, None
+        if owner == "user" and not self.loop.is_closed():
+            self.loop.call_soon_threadsafe(self.core.hub.kick)
+        elif owner == "hub":
+            self.core.wake()
 
     def register(self, type: int, id: int, payload: bytes, *, threaded: bool = False) -> Pending:
         """A new pending transaction with a seq not in use for ``id``; ``threaded``: waited for by a thread."""
@@ -230,12 +249,18 @@ class Transactions:
         gate = self.gate.exclusive() if type == m.CONTROL else self.gate.shared()
         async with gate:
             await core.check_ready(max(core.connect_timeout, retry * core.tries))
-            p = self.register(type, id, payload)
+            while type == m.CONTROL and not self.claim_control("user"):
+                await core.changes(retry)  # the hub's bind report is out: a round trip at most
             try:
-                self.transmit(p)
-                return await self._answer(p, retry, what)
+                p = self.register(type, id, payload)
+                try:
+                    self.transmit(p)
+                    return await self._answer(p, retry, what)
+                finally:
+                    self.unregister(p)
             finally:
-                self.unregister(p)
+                if type == m.CONTROL:
+                    self.release_control()
 
     async def _answer(self, p: Pending, retry: float, what: str) -> Frame:
         core = self.core

@@ -12,7 +12,7 @@ __all__ = [
     "PROTOCOL_VERSION", "HELLO", "HEARTBEAT", "CHUNK", "REQUEST", "RESPONSE", "CONTROL", "ACK", "NAK",
     "EVENT", "SUBSCRIBE", "SAMPLE", "TYPE_NAMES", "FLAG_DEVICE", "FLAG_REPLY", "FLAG_F64",
     "NakCode", "nak_name", "fnv1a32", "Hello", "Heartbeat", "ChunkRequest", "Chunk", "Subscribe",
-    "SubscribeAck", "Sample", "Nak", "describe",
+    "SubscribeAck", "Sample", "Nak", "BindReport", "describe",
 ]
 
 PROTOCOL_VERSION = 1
@@ -265,11 +265,28 @@ class Nak:
         return nak_name(self.code)
 
 
+@dataclass(frozen=True)
+class BindReport:
+    """Bind report payload (hub to device, ``C`` id 0): ``version`` (1), then one status per hub
+    id of the device's "hub" list, 0 bound or the NAK code saying why not."""
+
+    version: int
+    status: "tuple[int, ...]"
+
+    def pack(self) -> bytes:
+        return bytes((self.version,) + tuple(self.status))
+
+    @classmethod
+    def unpack(cls, payload: bytes) -> "BindReport":
+        _need(payload, 1, "bind report", exact=False)
+        return cls(payload[0], tuple(payload[1:]))
+
+
 def describe(frame: Frame, kind: Optional[str] = None) -> Dict[str, Any]:
     """Decode a frame's payload into a dict ``{"kind": ..., fields...}`` (format of frames.json).
 
-    ``kind`` disambiguates ``J`` (``chunk_request`` / ``chunk``); by default a 3-byte ``J`` payload is
-    a request. Byte strings are given as lowercase hex. Raises PayloadError on a bad length.
+    ``kind`` disambiguates ``J`` (``chunk_request`` / ``chunk``; by default a 3-byte ``J`` payload is
+    a request) and names a ``C`` with id 0 from the hub ``bind_report``. Byte strings are given as lowercase hex. Raises PayloadError on a bad length.
     """
     t, p = frame.type, frame.payload
     if t == HELLO:
@@ -302,6 +319,9 @@ def describe(frame: Frame, kind: Optional[str] = None) -> Dict[str, Any]:
     if t == SAMPLE:
         s = Sample.unpack(p)
         return {"kind": "sample", "since_ms": s.since_ms, "value": s.value.hex()}
+    if t == CONTROL and kind == "bind_report":
+        b = BindReport.unpack(p)
+        return {"kind": "bind_report", "version": b.version, "status": list(b.status)}
     if t in (REQUEST, RESPONSE, CONTROL, EVENT):
         return {"kind": TYPE_NAMES[t], "value": bytes(p).hex()}
     raise PayloadError(f"unknown message type 0x{t:02x}")

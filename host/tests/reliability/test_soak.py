@@ -48,6 +48,11 @@ def test_soak_exactly_once_no_corruption_no_reset(emulator_bin: str, tmp_path: A
         assert boot["acked"] > 100 and boot["device"]["tokens_applied"] >= boot["acked"], boot
     assert r["acked"] > 500 and r["events_delivered"] > 50 and r["reads"] > 50
     assert r["applied_twice"] == 0
+    # the other direction carried real load in both boots too, and went through the faults
+    for boot in r["hub_channels"]["boots"]:
+        c = boot["device"]
+        assert c["tally_acked"] > 50 and c["bump_ok"] > 10 and c["ticks"] > 50, boot
+    assert r["hub_channels"]["device_duplicates"] > 0 and r["hub_channels"]["hub_event_retries"] > 0
 
 
 def test_connect_and_discover_through_a_lossy_link(emu: Any) -> None:
@@ -69,7 +74,7 @@ def test_the_per_boot_check_sees_a_write_applied_twice_and_a_lost_one() -> None:
 
     boot = {"tokens_sent": 10, "first_sent": 1, "last_sent": 10, "acked": 9, "timeouts": 1, "link_lost_errors": 0,
             "device": {"tokens_applied": 10, "twice": 0, "gaps": 0, "first_token": 1, "last_token": 10},
-            "events_queued": 4, "selftest_timeouts": 0, "events_delivered": 4, "event_seq_gaps_or_dups": 0,
+            "events_queued": 4, "selftest_timeouts": 0, "events_delivered": 4, "event_seq_repeated": 0,
             "event_order_ok": True}
     assert check_segment(0, boot) == []
     twice = dict(boot, device=dict(boot["device"], tokens_applied=11, twice=1))

@@ -255,3 +255,20 @@ def test_watch_through_the_service_sees_events_another_client_caused(serve: Serv
     finally:
         watch.terminate()
         watch.wait(10)
+
+
+def test_hub_channels_are_not_routed_through_the_service(serve: Serve, emulators: Callable[[str], Emulator]) -> None:
+    """The program that declares hub channels answers the device itself: a board name (which only the
+    service knows) is refused with the reason, a port opens directly (and the service holds it)."""
+    from hubwire import HubChannels, HubwireError
+    from hubwire.diagnose import PortOpenError
+
+    emu = emulators("a")
+    serve.wait_state("rover", "ready")
+    hub = HubChannels()
+    hub.provide("setpoint", 21.5, type="f32")
+    with pytest.raises(HubwireError, match="hub channels"):
+        hubwire.connect("rover", hub=hub, timeout=5)
+    with pytest.raises(PortOpenError) as busy:
+        hubwire.connect(emu.link, hub=hub, timeout=5)
+    assert busy.value.kind == "PortBusy"

@@ -215,7 +215,9 @@ class Examples:
         self.sims: dict = {}
         self.devices: List[Any] = []
 
-    def start(self, name: str) -> Any:
+    def start(self, name: str, **connect: Any) -> Any:
+        """Run examples/<name> on a simulated Uno and connect to it (``connect``: to hubwire.connect,
+        e.g. ``hub=`` the hub channels the sketch uses)."""
         import hubwire
 
         elf = example_elf(name)
@@ -224,7 +226,7 @@ class Examples:
         sim = Simuno(self.binary, elf, str(self.tmp_path / name), str(self.tmp_path / f"{name}.log"))
         sim.start()
         self.sims[name] = sim
-        dev = hubwire.connect(transport=tapped(sim.link))
+        dev = hubwire.connect(transport=tapped(sim.link), **connect)
         self.devices.append(dev)
         return dev
 

@@ -20,6 +20,10 @@ device itself. The run is cut in three by two events:
 
 Streams (``left``, ``right``, ``battery``, ``range`` at 100 Hz, every sample checked) are opened on a
 clean moment of the link and closed before each of the two events.
+
+The other direction runs all along (:class:`.soak_hub.HubTraffic`): the sketch writes tokens into
+the hub's ``tally`` and calls its ``bump``, the hub sends ``tick`` events; each boot's counts are
+settled on the clean link with the rest (:func:`.soak_hub.check_hub_boots`).
 """
 from __future__ import annotations
 
@@ -36,6 +40,7 @@ from typing import Any, Callable, Dict, List, Optional
 
 from .. import repo_root
 from . import FaultLink, Faults, stop_process
+from .soak_hub import HubTraffic, check_hub_boots
 from .soak_load import Load, check_segment, first_after, retry, value_for, wait_for
 
 __all__ = ["SOAK_FAULTS", "run_soak", "check", "value_for", "soak_emulator_binary"]
@@ -78,6 +83,7 @@ class _Run:
         self.fl = FaultLink(self.dev_link, self.hub_link, seed=seed).start()
         self.dev: Any = None
         self.load: Any = None
+        self.traffic = HubTraffic()
         self.report: Dict[str, Any] = {}
 
     def set_faults(self, f: Faults) -> None:
@@ -89,11 +95,12 @@ class _Run:
 
         self.set_faults(self.faults)
         t = time.monotonic()
-        self.dev = hubwire.connect(self.hub_link, cache_dir=self.cache, timeout=20)
+        self.dev = hubwire.connect(self.hub_link, cache_dir=self.cache, timeout=20, hub=self.traffic.hub)
         self.report["connect"] = {"seconds": round(time.monotonic() - t, 2),
                                   "downloads": self.dev.session.stats.downloads,
                                   "chunk_requests": self.dev.session.stats.chunk_requests}
         self.load = Load(self.dev, self.log)
+        self.traffic.start(self.dev)
 
     def open_streams(self) -> None:
         """Subscribe on a clean moment (subscribing is not what is tested here), again until it
@@ -122,6 +129,7 @@ class _Run:
                          f"token {self.load.token}, {len(self.load.lost)} link losses")
                 next_report = time.monotonic() + 10
             self.load.step()
+            self.traffic.step(self.dev)
             self._revive_streams()
 
     def _revive_streams(self) -> None:
@@ -149,6 +157,7 @@ class _Run:
         self.set_faults(Faults(cut=True))
         while time.monotonic() - t < DEAD_TIMEOUTS * LOSS_TIMEOUT_S:
             load.step()
+            self.traffic.step(dev)
         lost = load.lost[lost0:]
         self.set_faults(self.faults)
         t_back = time.monotonic()
@@ -168,6 +177,7 @@ class _Run:
         load.stop_streams()
         self.set_faults(CLEAN)
         load.close_segment(final=False)
+        self.traffic.close_boot(dev)
         self.set_faults(self.faults)
         r0, dl0 = len(load.reconnects), dev.session.stats.downloads
         self.emu.kill()
@@ -178,6 +188,7 @@ class _Run:
         self.report["reboot"] = {"reconnected": ok, "seconds": round(time.monotonic() - t, 2),
                                  "downloads": dev.session.stats.downloads - dl0,
                                  "cache_hits": dev.session.stats.cache_hits}
+        self.traffic.start(dev)
         self.open_streams()
 
     def close(self) -> None:
@@ -215,6 +226,7 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
         run.load.stop_streams()
         run.set_faults(CLEAN)  # accounting on a clean link
         run.load.close_segment(final=True)
+        run.traffic.close_boot(run.dev)
         return _result(run, elapsed, during, f0, frames, seed)
     finally:
         run.close()
@@ -247,6 +259,9 @@ def _result(run: _Run, elapsed: float, during: Dict[str, Any], f0: int, frames: 
                                             "link_restored", "rehandshakes", "not_linked", "unknown_frames",
                                             "downloads", "cache_hits")},
         "hub_rx_counters": health.hub_counters, "device_rx_counters": health.device_counters,
+        "hub_channels": {"boots": run.traffic.boots, "ticks_notified": run.traffic.notified,
+                         **{k: stats[k] for k in ("device_writes", "device_calls", "device_duplicates",
+                                                  "hub_events_delivered", "hub_event_retries", "binds_sent")}},
     }
 
 
@@ -276,6 +291,9 @@ def check(r: Dict[str, Any]) -> List[str]:
                    f"{b['downloads']} downloads (expected True, 1, 0: the descriptor comes from the cache)")
     if r["state"] != "ready":
         bad.append(f"session ended {r['state']}")
+    if len(r["hub_channels"]["boots"]) != 2:
+        bad.append(f"{len(r['hub_channels']['boots'])} boots of hub channel traffic accounted, expected 2")
+    bad += check_hub_boots(r["hub_channels"]["boots"])
     return bad
 
 
