@@ -24,9 +24,18 @@ _STATE_COLOURS = {"ready": "green", "connecting": "orange", "lost": "red", "unpl
 
 
 def hub_channels(feed: BoardFeed) -> List[Channel]:
-    """Channels this hub offers to the device (the symmetric link, issue #18): none yet. When the
-    session exposes them, they are drawn below the device's own with the same views."""
-    return []
+    """The hub channels the board uses (its descriptor's "hub" list: values it reads or writes on
+    the hub, actions it calls, events it hears), drawn below its own channels with their binding."""
+    d = feed.dev.descriptor if feed is not None else None
+    return list(d.hub) if d is not None else []
+
+
+def hub_binding(feed: BoardFeed) -> Dict[str, str]:
+    """Each hub channel's binding as this hub sees it: "ok", or why not (no such channel here...)."""
+    try:
+        return dict(feed.dev.hub_binding())
+    except Exception:  # noqa: BLE001 - a board not discovered yet: nothing to say
+        return {}
 
 
 def _access(ch: Channel) -> str:
@@ -74,8 +83,17 @@ class BoardView:
                             ui.label(ch.description).classes("text-xs italic")
                         for v in channel_views(feed, ch):
                             (self.plots if isinstance(v, PlotView) else self.values).append(v)
-            for ch in hub_channels(feed):  # the hub's own channels go here (issue #18)
-                pass
+            hub = hub_channels(feed)
+            if hub:
+                binding = hub_binding(feed)
+                with ui.expansion(f"hub channels it uses ({len(hub)})", value=True).classes("w-full"):
+                    for ch in hub:
+                        state = binding.get(ch.name, "-")
+                        with ui.row().classes("gap-4 items-baseline text-sm"):
+                            ui.label(ch.name).classes("font-bold")
+                            ui.label(f"{_access(ch)}, {ch.type_name}").classes("text-gray-600")
+                            ui.label("bound here" if state == "ok" else f"not bound here: {state}") \
+                                .props(f'data-hw-hub="{board.key}.{ch.name}"')
             events = [c.name for c in d.channels if c.is_event]
             with ui.expansion(f"events ({', '.join(events) or 'none declared'})", value=True).classes("w-full"):
                 self.events = ui.column().classes("gap-0 font-mono text-sm max-h-64 overflow-auto") \
