@@ -47,7 +47,7 @@ def footprint():
         name, f, s, df, ds, tf, ts, heap = m.groups()
         flash_met = int(df) <= int(tf) and heap == "no"
         sram_met = int(ds) <= int(ts) and heap == "no"
-        rows.append(row(f"1. Uno flash of {name} over the Serial-echo baseline", f"<= +{int(tf) / 1024:.1f} KB, no heap",
+        rows.append(row(f"1. Uno flash of {name} over the Serial-echo baseline", f"<= +{int(tf):,} B, no heap",
                         f"+{int(df):,} B, malloc linked: {heap}", flash_met, "bash bench/footprint.sh",
                         "see Misses below" if not flash_met else ""))
         rows.append(row(f"1. Uno static SRAM of {name} over the Serial-echo baseline", f"<= +{ts} B, no heap",
