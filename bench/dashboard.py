@@ -170,10 +170,10 @@ of every board are updated. Load average at the end {load[0]:.1f} on {os.cpu_cou
            "page reloads"], lines)}
 """
     lat = first["lat"]
-    rows = [row(f"8. Dashboard, {a.boards} boards x imu at 100 Hz, page open: CPU of the dashboard process",
+    rows = [row(f"9. Dashboard, {a.boards} boards x imu at 100 Hz, page open: CPU of the dashboard process",
                 "(measured)", f"{first['dash']:.0%} of one core (browser {first['browser']:.0%})", None,
                 "python bench/dashboard.py", f"all streams at 100 Hz: {res[1]['dash']:.0%}"),
-            row("8. Dashboard: sample at the hub -> value drawn on the page", "(measured)",
+            row("9. Dashboard: sample at the hub -> value drawn on the page", "(measured)",
                 f"p50 {pct(lat, 0.5):.0f} ms, p90 {pct(lat, 0.9):.0f} ms, p99 {pct(lat, 0.99):.0f} ms", None,
                 "python bench/dashboard.py", "100 ms page refresh; all streams at 100 Hz: "
                 f"p50 {pct(res[1]['lat'], 0.5):.0f} / p99 {pct(res[1]['lat'], 0.99):.0f} ms")]
