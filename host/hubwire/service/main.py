@@ -34,6 +34,9 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
     s.add_argument("--poll", type=float, default=0.5, help="seconds between port scans (default 0.5)")
     s.add_argument("--mqtt", metavar="HOST:PORT", default=None,
                    help="also run the MQTT bridge to this broker (hubwire.service.mqtt)")
+    s.add_argument("--mqtt-id", default=None, metavar="ID",
+                   help="this service's id on the broker (default: the host name); each service on one "
+                        "broker needs its own")
     s.add_argument("--http", type=int, default=None, metavar="HTTP_PORT",
                    help="also serve the dashboard on this port (hubwire.dashboard; docs/DASHBOARD.md)")
     s.add_argument("--http-host", default="127.0.0.1",
@@ -49,7 +52,7 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
 
 async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] = None,
                 mqtt: Optional[str] = None, ready: Any = None,
-                clients: Sequence[Callable[[Fleet], Awaitable[Any]]] = ()) -> None:
+                clients: Sequence[Callable[[Fleet], Awaitable[Any]]] = (), mqtt_id: Optional[str] = None) -> None:
     """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`);
     with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``;
     each of ``clients`` (the dashboard) runs on the fleet as one more task until the service stops."""
@@ -61,7 +64,7 @@ async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] 
     try:
         if bridge is not None and mqtt is not None:
             host, port = broker_address(mqtt)
-            res = bridge(fleet, host=host, port=port)
+            res = bridge(fleet, host=host, port=port, **({"service_id": mqtt_id} if mqtt_id else {}))
             task = asyncio.ensure_future(res) if inspect.isawaitable(res) else None
         others = [asyncio.ensure_future(c(fleet)) for c in clients]
         if ready is not None:
@@ -128,7 +131,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
         await serve(fleet, sock, bridge, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True),
-                    clients=clients)
+                    clients=clients, mqtt_id=args.mqtt_id)
 
     try:
         asyncio.run(main())

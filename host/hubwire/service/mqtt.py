@@ -250,6 +250,11 @@ class Bridge:
             self.elsewhere[key] = service
         else:
             self.elsewhere.pop(key, None)
+        if isinstance(service, str) and service != self.config.service_id and key in self.boards:
+            # two hubs each serve a board under this key: both would answer its commands
+            log.error("hubwire serve: MQTT: board %r is also served by service %r on this broker; give one "
+                      "of the boards another device name (each board key must be unique on a broker)",
+                      key, service)
 
 
 class Reply:

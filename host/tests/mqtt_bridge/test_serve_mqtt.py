@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import select
 import subprocess
 from typing import Any, Callable, List
 
@@ -76,3 +77,79 @@ def test_serve_with_mqtt_as_a_user_sees_it(broker: Broker, tmp_path: Any) -> Non
         for e in emus:
             e.stop()
     assert status == 0, serve.log_text()
+
+
+def test_two_services_on_one_broker_one_client_commands_both(broker: Broker, tmp_path: Any) -> None:
+    """Two hubs (two `hubwire serve --mqtt` processes with ids of their own, each owning its board) on
+    one broker: a plain MQTT 5 client commands a board of each and gets one reply from each; each
+    service answers for its own board only (commands for the other's are left to it)."""
+    if shutil.which("mosquitto_rr") is None:
+        pytest.fail("mosquitto_rr missing: run tools/setup.sh (apt-get install mosquitto-clients)", pytrace=False)
+    actions = os.path.join(os.path.dirname(emulator_binary()), "hubwire-actions-emulator")
+    services: List[Serve] = []
+    emus: List[Emulator] = []
+    try:
+        for name, binary, key in (("one", emulator_binary(), "rover"), ("two", actions, "actions")):
+            boards = tmp_path / name
+            boards.mkdir()
+            emus.append(Emulator(binary, str(boards / "board")))
+            emus[-1].start()
+            sock = str(tmp_path / f"run-{name}" / "hubwire.sock")
+            cache = tmp_path / f"cache-{name}"
+            cache.mkdir()
+            env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
+                       PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
+            services.append(Serve(str(boards), sock, env, str(tmp_path / f"serve-{name}.log"),
+                                  ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", f"hub-{name}"]))
+            services[-1].start()
+            services[-1].wait_state(key, "ready")
+
+        def replies(topic: str, value: str, n: int) -> List[str]:
+            """The replies to one MQTT 5 command (response topic set), once ``n`` have come and the
+            broker has then delivered a later message of ours (a fence: a second answer would be
+            before it)."""
+            back = f"replies/{topic}"
+            sub = subprocess.Popen(["mosquitto_sub", "-h", "127.0.0.1", "-p", str(broker.port), "-V", "5", "-v",
+                                    "-t", back, "-t", "fence/" + topic], stdout=subprocess.PIPE, text=True)
+            assert sub.stdout is not None
+
+            def fence() -> List[str]:
+                """Publish to the fence topic until it comes back: every reply sent before it is read."""
+                lines: List[str] = []
+                while True:
+                    subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(broker.port),
+                                    "-t", "fence/" + topic, "-m", "f"], check=True, timeout=30)
+                    while select.select([sub.stdout], [], [], 0.2)[0]:
+                        line = sub.stdout.readline().strip()  # type: ignore[union-attr]
+                        if line.startswith("fence/"):
+                            return lines
+                        lines.append(line)
+            try:
+                fence()  # subscribed: the command's replies cannot be missed
+                subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(broker.port), "-V", "5", "-q", "1",
+                                "-t", topic, "-m", value, "-D", "publish", "response-topic", back],
+                               check=True, timeout=30)
+                got: List[str] = []
+                while len(got) < n:
+                    got += fence()
+                # both services have handled the command by now (each answered a request of the local
+                # socket since): a second reply would come before one more fence
+                for s in services:
+                    s.cli("get", *(["rover", "left"] if s is services[0] else ["actions", "calls"]))
+                return got + fence()
+            finally:
+                sub.terminate()
+                sub.wait(10)
+
+        for topic, value in (("hubwire/rover/set/left", "0.25"), ("hubwire/actions/set/blink", "3")):
+            got = replies(topic, value, 1)
+            assert len(got) == 1 and '"ok": true' in got[0].replace('"ok":true', '"ok": true'), got
+        assert float(services[0].cli("get", "rover", "left").stdout) == 0.25
+        assert int(services[1].cli("get", "actions", "calls").stdout) >= 1
+        assert [b["key"] for b in services[0].boards()] == ["rover"]
+        assert [b["key"] for b in services[1].boards()] == ["actions"]
+    finally:
+        for s in services:
+            s.stop()
+        for e in emus:
+            e.stop()
