@@ -10,7 +10,8 @@ bool heating = false;
 float setpoint = 0.0f;      // the hub's "setpoint", requested every second
 uint16_t report = 0;        // written into the hub's "report": temperature in tenths of a degree
 uint8_t mode = 0;           // the hub's "mode" events land here: 0 off, 1 heat
-hubwire::RemoteAction<bool(float)> alarm;  // the hub's action "alarm": told the temperature
+hubwire::RemoteAction<bool(float)> raiseAlarm;  // the hub's action "alarm": told the temperature
+// (not called `alarm`: POSIX has an alarm() that ESP32 and Linux builds see)
 
 uint16_t setpoints = 0, reports = 0, alarms = 0, modes = 0, failures = 0;
 uint8_t lastFailure = 0;
@@ -32,7 +33,7 @@ HUBWIRE_CHANNELS(channels, "thermostat",
   expose("last_failure", lastFailure),
   remote("setpoint", setpoint).unit("C"),
   remote("report", report).writeOnly(),
-  remoteAction("alarm", alarm),
+  remoteAction("alarm", raiseAlarm),
   remoteEvent("mode", mode).onChange(modeChanged));
 
 uint32_t lastAsk = 0;
@@ -52,5 +53,5 @@ void loop() {
   hub.request(setpoint, setpointArrived, failed);
   report = (uint16_t)(temperature * 10);
   hub.write(report, reportAcked, failed);
-  if (temperature > setpoint + 5.0f) hub.call(alarm, temperature, alarmAnswered, failed);
+  if (temperature > setpoint + 5.0f) hub.call(raiseAlarm, temperature, alarmAnswered, failed);
 }
