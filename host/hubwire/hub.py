@@ -82,33 +82,20 @@ class HubChannel:
     """One declared hub channel. ``value`` is what a device reads (a variable-like channel) or the
     last value a device wrote; ``channel`` is the parsed descriptor entry (codec, range)."""
 
-    def __init__(self, name: str, access: str, entry: Dict[str, Any], *, source: Any = None,
+    def __init__(self, entry: Dict[str, Any], *, source: Any = None,
                  getter: Optional[Callable[[], Any]] = None, on_write: Optional[Callable[[Any], Any]] = None,
                  fn: Optional[Callable[..., Any]] = None) -> None:
-        self.name = name
-        self.access = access
         self.entry = entry
         self.getter = getter
         self.on_write = on_write
         self.fn = fn
         self.channel: Channel = _check_entry(entry)
         self._value = None if source is None else self.channel.check(source)
-
-    @property
-    def readable(self) -> bool:
-        return "r" in self.access
-
-    @property
-    def writable(self) -> bool:
-        return "w" in self.access
-
-    @property
-    def callable(self) -> bool:
-        return "c" in self.access
-
-    @property
-    def is_event(self) -> bool:
-        return "e" in self.access
+        self.name = self.channel.name
+        self.access = self.channel.access
+        # what the device may do with it, as the parsed entry says
+        self.readable, self.writable = self.channel.readable, self.channel.writable
+        self.callable, self.is_event = self.channel.callable, self.channel.is_event
 
     @property
     def value(self) -> Any:
@@ -196,7 +183,7 @@ class HubChannels:
                 raise HubChannelError(f"hub channel {name!r}: give type= (the function has no return annotation)")
         access = "rw" if writable or on_write is not None else "r"
         entry = self._entry(name, access, _type_obj(type, fields, name), unit, min, max, doc)
-        return self._add(HubChannel(name, access, entry, source=None if getter else source, getter=getter,
+        return self._add(HubChannel(entry, source=None if getter else source, getter=getter,
                                     on_write=on_write))
 
     def accept(self, name: str, on_write: Optional[Callable[[Any], Any]] = None, *, type: TypeSpec = None,
@@ -210,7 +197,7 @@ class HubChannels:
             if spec is None or spec is inspect_missing:
                 raise HubChannelError(f"hub channel {name!r}: give type= (or annotate the handler's parameter)")
             entry = self._entry(name, "w", _type_obj(spec, fields, name), unit, min, max, doc)
-            return self._add(HubChannel(name, "w", entry, source=initial, on_write=cb))
+            return self._add(HubChannel(entry, source=initial, on_write=cb))
         if on_write is None and type is None:
             return _Decorator(declare)  # the type comes from the handler's annotation
         return declare(on_write)
@@ -233,14 +220,13 @@ class HubChannels:
                 entry["rt"] = rt["t"]
                 if "c" in rt:
                     entry["rc"] = rt["c"]
-            return self._add(HubChannel(name, "c", entry, fn=f))
+            return self._add(HubChannel(entry, fn=f))
         return declare if fn is None else declare(fn)
 
     def event(self, name: str, *, type: TypeSpec, fields: Any = None, unit: Optional[str] = None,
               doc: Optional[str] = None) -> HubChannel:
         """An event the hub sends to the device with ``dev.notify(name, value)``."""
-        return self._add(HubChannel(name, "e", self._entry(name, "e", _type_obj(type, fields, name), unit, None, None,
-                                                         doc)))
+        return self._add(HubChannel(self._entry(name, "e", _type_obj(type, fields, name), unit, None, None, doc)))
 
     def remove(self, name: str) -> None:
         """Withdraw a channel (its hub-side id is not reused)."""

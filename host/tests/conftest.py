@@ -111,10 +111,15 @@ def rover(emulator: Emulator, cache_dir: str):  # type: ignore[no-untyped-def]
     dev.close()
 
 
-def wait_until(predicate, timeout: float = 5.0, what: str = "condition") -> None:  # type: ignore[no-untyped-def]
-    """Poll ``predicate`` (for state we cannot subscribe to, e.g. another process) until true."""
+def wait_until(predicate, timeout: float = 5.0, what: str = "condition",  # type: ignore[no-untyped-def]
+               interval: float = 0.01):
+    """Poll ``predicate`` (for state we cannot subscribe to, e.g. another process) until it returns
+    something truthy, which is returned; AssertionError after ``timeout``."""
     deadline = time.monotonic() + timeout
-    while not predicate():
+    while True:
+        v = predicate()
+        if v:
+            return v
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.01)
+        time.sleep(interval)

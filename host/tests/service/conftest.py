@@ -9,12 +9,11 @@ import selectors
 import signal
 import subprocess
 import sys
-import time
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence
 
 import pytest
 
-from conftest import Emulator
+from conftest import Emulator, wait_until
 from hubwire.testing import emulator_binary
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -22,15 +21,8 @@ HOST = os.path.dirname(os.path.dirname(HERE))
 
 
 def wait_for(predicate: Callable[[], Any], timeout: float = 15.0, what: str = "condition") -> Any:
-    """Poll ``predicate`` until it returns something truthy (returned); AssertionError after ``timeout``."""
-    deadline = time.monotonic() + timeout
-    while True:
-        v = predicate()
-        if v:
-            return v
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.05)
+    """:func:`conftest.wait_until` with the longer deadline a service's processes need."""
+    return wait_until(predicate, timeout, what, 0.05)
 
 
 class Serve:

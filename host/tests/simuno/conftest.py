@@ -12,10 +12,11 @@ import selectors
 import signal
 import subprocess
 import time
-from typing import Any, Callable, Iterator, List, Optional
+from typing import Any, Iterator, List, Optional
 
 import pytest
 
+from conftest import wait_until  # noqa: F401  (the simulated-Uno tests take it from here)
 from hubwire.testing import tapped
 from hubwire.testing.faultlink import stop_process
 
@@ -185,19 +186,6 @@ def take(stream: Any, n: int, deadline: float) -> List[Any]:
             break
         got.append(x)
     return got
-
-
-def wait_until(predicate: Callable[[], Any], timeout: float = 5.0, what: str = "condition",
-               interval: float = 0.02) -> Any:
-    """Poll ``predicate`` until it returns something truthy (returned); AssertionError after ``timeout``."""
-    deadline = time.monotonic() + timeout
-    while True:
-        v = predicate()
-        if v:
-            return v
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(interval)
 
 
 def example_elf(name: str) -> str:
