@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import asyncio
 from collections import deque
-from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple, cast
+from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple, TypeVar, cast
 
 from . import ops
 from .descriptor import Channel, Descriptor
@@ -35,7 +35,7 @@ from .text import clip
 from .transport import Transport
 from .wire import messages as m
 
-__all__ = ["connect", "AsyncDevice", "AsyncStream", "AsyncEventStream"]
+__all__ = ["connect", "AsyncDevice", "AsyncStream", "AsyncEventStream", "EventIterator"]
 
 
 def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float = 5.0,
@@ -312,7 +312,38 @@ class _AsyncSink(EventSink):
         self.put(None)
 
 
-class AsyncEventStream:
+_Events = TypeVar("_Events", bound="EventIterator")
+
+
+class EventIterator:
+    """``async for`` and ``async with`` over :meth:`get` and :meth:`close`, for the event streams of
+    a session (:class:`AsyncEventStream`) and of a board through the service."""
+
+    timeout: Optional[float] = None
+
+    async def get(self, timeout: Optional[float] = None) -> Optional[ReceivedEvent]:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def __aiter__(self: _Events) -> _Events:
+        return self
+
+    async def __anext__(self) -> ReceivedEvent:
+        ev = await self.get(self.timeout)
+        if ev is None:
+            raise StopAsyncIteration
+        return ev
+
+    async def __aenter__(self: _Events) -> _Events:
+        return self
+
+    async def __aexit__(self, *exc: Any) -> None:
+        self.close()
+
+
+class AsyncEventStream(EventIterator):
     """``async for ev in dev.events(...)``: incoming :class:`ReceivedEvent` objects from its creation
     on, riding through link losses and device reboots; ends when the session closes, or after
     ``timeout`` s without an event (when given)."""
@@ -322,15 +353,6 @@ class AsyncEventStream:
         self.timeout = timeout
         self._sink: Optional[_AsyncSink] = _AsyncSink(core, names)
         core.events.add_sink(self._sink)
-
-    def __aiter__(self) -> "AsyncEventStream":
-        return self
-
-    async def __anext__(self) -> ReceivedEvent:
-        ev = await self.get(self.timeout)
-        if ev is None:
-            raise StopAsyncIteration
-        return ev
 
     async def get(self, timeout: Optional[float] = None) -> Optional[ReceivedEvent]:
         """Next event within ``timeout`` s (None: wait forever), or None."""
@@ -351,10 +373,4 @@ class AsyncEventStream:
         sink, self._sink = self._sink, None
         if sink is not None:
             self._core.events.remove_sink(sink)
-
-    async def __aenter__(self) -> "AsyncEventStream":
-        return self
-
-    async def __aexit__(self, *exc: Any) -> None:
-        self.close()
 

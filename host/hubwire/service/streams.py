@@ -6,6 +6,7 @@ import asyncio
 from collections import deque
 from typing import TYPE_CHECKING, Any, Deque, Dict, List, Optional
 
+from ..aio import EventIterator
 from ..descriptor import Channel
 from ..errors import LinkLost, StreamEnded, Timeout
 from ..session import ReceivedEvent, StreamSample
@@ -95,7 +96,7 @@ class RemoteStream:
         await self.aclose()
 
 
-class RemoteEvents:
+class RemoteEvents(EventIterator):
     """``async for ev in dev.events(...)`` through the service: every event from its creation on."""
 
     def __init__(self, dev: AsyncRemoteDevice, names: List[str], timeout: Optional[float]) -> None:
@@ -121,20 +122,5 @@ class RemoteEvents:
         except (Timeout, _Closed):
             return None
 
-    def __aiter__(self) -> "RemoteEvents":
-        return self
-
-    async def __anext__(self) -> ReceivedEvent:
-        ev = await self.get(self.timeout)
-        if ev is None:
-            raise StopAsyncIteration
-        return ev
-
     def close(self) -> None:
         asyncio.ensure_future(self.dev.conn.unsubscribe(self._sub))
-
-    async def __aenter__(self) -> "RemoteEvents":
-        return self
-
-    async def __aexit__(self, *exc: Any) -> None:
-        self.close()
