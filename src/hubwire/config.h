@@ -19,6 +19,13 @@
 #define HUBWIRE_MAX_PAYLOAD 32
 #endif
 
+// Largest value a channel may declare (bytes on the wire). A value whose message does not fit one
+// frame travels as fragments (docs/PROTOCOL.md 12); writes of such values are reassembled in one
+// buffer sized to the largest of them, which only a sketch that declares one has.
+#ifndef HUBWIRE_MAX_VALUE
+#define HUBWIRE_MAX_VALUE 1024
+#endif
+
 // Events waiting for the hub's ACK, and the largest event value in bytes.
 #ifndef HUBWIRE_EVENT_QUEUE
 #define HUBWIRE_EVENT_QUEUE 4
@@ -99,6 +106,7 @@
 namespace hubwire {
 static_assert(HUBWIRE_MAX_PAYLOAD >= 16 && HUBWIRE_MAX_PAYLOAD <= 255,
               "HUBWIRE_MAX_PAYLOAD must be 16..255 (hello needs 16 bytes)");
+static_assert(HUBWIRE_MAX_VALUE >= 1 && HUBWIRE_MAX_VALUE <= 65535L, "HUBWIRE_MAX_VALUE must be 1..65535");
 static_assert(HUBWIRE_EVENT_QUEUE >= 1 && HUBWIRE_EVENT_QUEUE <= 64, "HUBWIRE_EVENT_QUEUE must be 1..64");
 static_assert(HUBWIRE_EVENT_MAX_PAYLOAD >= 1 && HUBWIRE_EVENT_MAX_PAYLOAD <= HUBWIRE_MAX_PAYLOAD,
               "HUBWIRE_EVENT_MAX_PAYLOAD must be 1..HUBWIRE_MAX_PAYLOAD");

@@ -25,7 +25,9 @@ const uint16_t kUsesEvents = 64;  // event(): the queue, its retries and ACKs
 const uint16_t kUsesRanges = 128;  // range(): writes checked against it
 const uint16_t kUsesWrites = 256;  // writable() variables (and onChange())
 const uint16_t kUsesReads = 512;  // readable variables: requests answered with their value
-const uint16_t kAllFeatures = 0x3FF;
+const uint16_t kUsesLists = 1024;  // a hubwire::List<T, N> value: the variable-length codec
+const uint16_t kUsesLarge = 2048;  // a value whose message may not fit one frame: fragments
+const uint16_t kAllFeatures = 0xFFF;
 
 extern const uint16_t sketchFeatures;
 

@@ -8,7 +8,7 @@
 using namespace hubwire;
 
 struct Wide {
-  uint8_t b[HUBWIRE_MAX_PAYLOAD];
+  uint8_t b[HUBWIRE_MAX_VALUE + 1];
 };
 struct Pose {
   float x;
@@ -18,7 +18,7 @@ struct Pose {
 struct Real {
   float v;
 };
-uint8_t big[HUBWIRE_MAX_PAYLOAD - 1];
+double big[200];  // 1600 bytes: above HUBWIRE_MAX_VALUE
 uint8_t fits[HUBWIRE_MAX_PAYLOAD - 2];
 uint64_t wide;
 Wide wideStruct;
@@ -29,6 +29,7 @@ char text[HUBWIRE_MAX_PAYLOAD - 2];
 uint16_t level;
 uint8_t small;
 int16_t whole;
+List<int16_t, 4> list;
 Event<uint32_t> fourBytes;
 int32_t answer(int16_t v) { return v; }
 uint64_t wideAnswer() { return 0; }
@@ -93,6 +94,8 @@ void changed() {}
 #elif HUBWIRE_CASE == 32
 #define TEXT50 "a text of fifty characters, ten words and no more."
 #define CASE , expose("long", level).describe(TEXT50 TEXT50 TEXT50 TEXT50 TEXT50 "123456")  // 256
+#elif HUBWIRE_CASE == 33
+#define CASE , expose("l", list).writable().failsafe(0)  // which length would it take?
 #else
 #define CASE
 #endif

@@ -7,6 +7,11 @@
 // skipped between two applied ones were never applied (a write that timed out): `gaps`. The hub's
 // check needs no inference: twice must be 0 and applied + never applied must equal what it sent.
 //
+// Large values: `blob` (40 bytes, more than one 32-byte frame) travels in fragments both ways. The
+// hub writes blobs with strictly increasing tokens and sum = FNV-1a 32 of the token's 4 bytes
+// (little-endian) then the 32 data bytes; the sketch counts blobs applied, corrupt (sum wrong: a
+// torn or damaged value), twice and gaps, as for `token`, and the hub reads blobs back whole.
+//
 // The other direction (the hub's channels): while the hub sets `hub_load`, the sketch writes
 // strictly increasing tokens into the hub's `tally` and calls the hub's `bump` with every 4th (the
 // hub returns it + 1), one request at a time, every 20 ms; the hub sends strictly increasing `tick`
@@ -31,6 +36,19 @@ uint32_t firstToken;     // the first token applied since boot
 uint32_t tokensApplied;  // onChange calls for token
 uint32_t twice;          // tokens not above the last applied one: applied twice or out of order
 uint32_t gaps;           // tokens skipped between two applied ones
+
+struct Blob {
+  uint32_t token;
+  uint8_t data[32];
+  uint32_t sum;
+} blob;
+// blob_counts: applied, corrupt, twice, gaps (one channel: the table is at HUBWIRE_MAX_CHANNELS)
+uint32_t blobCounts[4];
+uint32_t& blobsApplied = blobCounts[0];
+uint32_t& blobsCorrupt = blobCounts[1];
+uint32_t& blobsTwice = blobCounts[2];
+uint32_t& blobsGaps = blobCounts[3];
+uint32_t lastBlob;
 
 bool hubLoad;             // set by the hub: drive the hub's channels
 uint32_t tallyToken;      // the last token written to the hub's tally (1, 2, 3, ... per boot)
@@ -88,6 +106,23 @@ void tokenChanged() {
   lastToken = token;
 }
 
+void blobChanged() {
+  ++blobsApplied;
+  uint32_t h = 2166136261UL;
+  for (uint8_t i = 0; i < 4; ++i) h = (h ^ (uint8_t)(blob.token >> (8 * i))) * 16777619UL;
+  for (uint8_t i = 0; i < sizeof(blob.data); ++i) h = (h ^ blob.data[i]) * 16777619UL;
+  if (h != blob.sum) {
+    ++blobsCorrupt;
+    return;
+  }
+  if (lastBlob != 0 && blob.token <= lastBlob) {
+    ++blobsTwice;
+    return;
+  }
+  if (lastBlob != 0) blobsGaps += blob.token - lastBlob - 1;
+  lastBlob = blob.token;
+}
+
 uint8_t selftest(uint8_t count) {
   uint8_t queued = 0;
   for (uint8_t i = 0; i < count; ++i)
@@ -117,6 +152,8 @@ HUBWIRE_CHANNELS(channels, device("soak").firmware("1.0.0"),
   expose("tokens_applied", tokensApplied),
   expose("twice", twice),
   expose("gaps", gaps),
+  expose("blob", blob, "token:u32,data:u8[32],sum:u32").writable().onChange(blobChanged),
+  expose("blob_counts", blobCounts),
   expose("hub_load", hubLoad).writable(),
   expose("hub_queued_now", hubQueuedNow),
   expose("tally_token", tallyToken),

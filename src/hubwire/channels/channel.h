@@ -79,6 +79,33 @@ bool callNoArg(const void* call, const uint8_t*, uint8_t* ret) {
   memcpy(ret, &r, sizeof(R));
   return true;
 }
+// A List argument arrives in its wire form (count, then packed elements).
+template <typename L>
+void listFromWire(L& a, const uint8_t* arg) {
+  a.count = arg[0];
+  memcpy(a.items, arg + 1, arg[0] * sizeof(a.items[0]));
+}
+template <typename L>
+bool callListVoid(const void* call, const uint8_t* arg, uint8_t*) {
+  L a;
+  listFromWire(a, arg);
+  functionAt<void (*)(const L&)>(call)(a);
+  return true;
+}
+template <typename L>
+bool callListChecked(const void* call, const uint8_t* arg, uint8_t*) {
+  L a;
+  listFromWire(a, arg);
+  return functionAt<bool (*)(const L&)>(call)(a);
+}
+template <typename R, typename L>
+bool callListRet(const void* call, const uint8_t* arg, uint8_t* ret) {
+  L a;
+  listFromWire(a, arg);
+  R r = functionAt<R (*)(const L&)>(call)(a);
+  memcpy(ret, &r, sizeof(R));
+  return true;
+}
 inline bool callPlain(const void* call, const uint8_t*, uint8_t*) {
   functionAt<void (*)()>(call)();
   return true;

@@ -18,6 +18,7 @@
 #include "remote.h"
 #include "tables.h"
 #include "hub_table.h"
+#include "../session/fragments.h"
 
 // The <false, tag> specialisations below exist only to keep the macro's text the same for every
 // sketch: nothing reads them.
@@ -44,6 +45,8 @@
   const Stored::ExtrasType extras HUBWIRE_FLASH = Stored::ExtrasType();                            \
   const Stored::InfosType infos HUBWIRE_FLASH = Stored::infos(extras);                             \
   typedef decltype(declared) Decls;                                                                \
+  constexpr uint16_t largeIn = ::hubwire::declare::largeInOf(declared.list);                       \
+  constexpr bool large = (features & ::hubwire::kUsesLarge) != 0;                                  \
   namespace {                                                                                      \
   struct Tag {};                                                                                   \
   }                                                                                                \
@@ -62,9 +65,22 @@
       HUBWIRE_UNUSED =                                                                             \
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
                                      &hubwire_channels_##var::declared>::dispatch();               \
+  HUBWIRE_LARGE_MEMBER(var, ::hubwire::Reassembly* const, state,                                     \
+                       ::hubwire::declare::LargeStore<hubwire_channels_##var::largeIn>::get())      \
+  HUBWIRE_LARGE_MEMBER(var, const uint16_t, capacity, hubwire_channels_##var::largeIn)              \
+  HUBWIRE_LARGE_MEMBER(var, const ::hubwire::FragmentReceiver, receive, &::hubwire::fragmentReceived) \
+  HUBWIRE_LARGE_MEMBER(var, const ::hubwire::LargeSender, send, &::hubwire::sendLarge)             \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>( \
           hubwire_channels_##var::json, hubwire_channels_##var::infos)
+
+// The fragments' hooks (session/fragments.h): set for a sketch with a large value, else for a
+// specialisation nothing reads.
+#define HUBWIRE_LARGE_MEMBER(var, Type, member, value)                                             \
+  template <>                                                                                      \
+  Type ::HubwireLarge<hubwire_channels_##var::large,                                               \
+                      ::HubwireHubTag<hubwire_channels_##var::large, hubwire_channels_##var::Tag>::type>::member \
+      HUBWIRE_UNUSED = value;
 
 // The sketch's features, for the session to test (features.h); none with HUBWIRE_ALL_FEATURES.
 #if defined(HUBWIRE_ALL_FEATURES)

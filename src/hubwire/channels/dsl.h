@@ -12,6 +12,7 @@
 #include "../wire/messages.h"
 #include "../wire/values.h"
 #include "channel.h"
+#include "list.h"
 #include "../features.h"
 #include "json.h"
 
@@ -177,8 +178,8 @@ class Decl {
     return k == 0 ? integer(id > 1 ? ",{\"id\":" : "{\"id\":", id)
          : k == 1 ? quoted(",\"n\":\"", name_)
          : k == 2 ? Piece{",\"a\":\"", kAccessLetters, access_, 0, "", "\""}
-         : k == 3 ? typeNamed(",\"t\":\"", code_)
-         : k == 4 ? (count_ ? integer(",\"c\":", count_) : empty())
+         : k == 3 ? typeNamed(",\"t\":\"", elementOf(code_))
+         : k == 4 ? (count_ ? integer(isListCode(code_) ? ",\"vc\":" : ",\"c\":", count_) : empty())
          : k == 5 ? (layout_ ? Piece{",\"f\":[", kFields, 0, 0, layout_, "]"} : empty())
          : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", ret_) : empty())
          : k == 7 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
@@ -216,13 +217,30 @@ class Decl {
   // Does the session call a function for this channel: a control's or action's, or onChange()'s?
   constexpr bool hasCall() const { return K == kControl || K == kAction || (flags_ & kOnChangeGiven); }
   constexpr uint16_t memSize() const { return memSize_; }
+  // Bytes of the value on the wire at most (a list or string full), 0 for none.
+  constexpr uint16_t wireBytes() const {
+    return (uint16_t)(code_ == kStr ? 1 + count_
+                      : code_ == kStruct ? (layoutSize(layout_) == kBadLayout ? 0 : layoutWireSize(layout_))
+                      : isListCode(code_) ? 1 + count_ * scalarBytes(elementOf(code_))
+                                          : scalarBytes(code_) * (count_ ? count_ : 1));
+  }
+  // Does a message carrying the value (a sample: 2 bytes more) not fit the device's frame?
+  constexpr bool large() const { return K < kRemote && wireBytes() + kSampleHeader > HUBWIRE_MAX_PAYLOAD; }
+  // The bytes a write or call with this value needs reassembled (0: it fits one frame).
+  constexpr uint16_t largeIn() const {
+    return (K == kControl || K == kAction || (K == kVariable && (access_ & kWritable))) && wireBytes() > HUBWIRE_MAX_PAYLOAD
+               ? wireBytes()
+               : 0;
+  }
+  constexpr bool listWithFailsafe() const { return isListCode(code_) && (flags_ & kHasFailsafe); }
   // The session's features this channel needs (features.h).
   constexpr uint16_t features() const {
     return (uint16_t)((access_ & kStreamable ? kUsesStreams : 0) | (flags_ & kHasFailsafe ? kUsesFailsafes : 0) |
                       (code_ == kStr ? kUsesStrings : 0) | (code_ == kStruct ? kUsesStructs : 0) |
                       (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid ? kUsesReturns : 0) |
                       (K == kEvent ? kUsesEvents : 0) | (flags_ & kHasRange ? kUsesRanges : 0) |
-                      (access_ & kWritable && K == kVariable ? kUsesWrites : 0) | (access_ & kReadable ? kUsesReads : 0));
+                      (access_ & kWritable && K == kVariable ? kUsesWrites : 0) | (access_ & kReadable ? kUsesReads : 0) |
+                      (isListCode(code_) ? kUsesLists : 0) | (large() ? kUsesLarge : 0));
   }
 
  private:
@@ -249,10 +267,11 @@ class Decl {
 };
 
 // ---- the declarations ----
+// A value larger than one frame travels in fragments (PROTOCOL.md 12); HUBWIRE_MAX_VALUE bounds it.
 template <typename T, size_t Bytes>
 constexpr bool checkValue() {
   static_assert(TypeOf<T>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
-  static_assert(Bytes + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "value larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  static_assert(Bytes <= HUBWIRE_MAX_VALUE, "value larger than HUBWIRE_MAX_VALUE (1024 bytes by default): raise it");
   return true;
 }
 template <typename R>
@@ -283,9 +302,17 @@ constexpr Decl<NotNumeric, kVariable> expose(const char* name, char (&str)[N]) {
 ///   expose("imu", imu, "ax:f32,ay:f32,az:f32,gyro:i16[3]")
 template <typename T>
 constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const char* layout) {
-  static_assert(sizeof(T) + kSampleHeader <= HUBWIRE_MAX_PAYLOAD, "struct larger than HUBWIRE_MAX_PAYLOAD - 2: raise it");
+  static_assert(sizeof(T) <= HUBWIRE_MAX_VALUE, "struct larger than HUBWIRE_MAX_VALUE (1024 bytes by default): raise it");
   return Decl<StructValue, kVariable>(name, layout, &var, kStruct, 0, kVoid, kReadable, nullptr, nullptr,
                                       (uint16_t)sizeof(T));
+}
+
+/// A variable-length array of up to N scalars (list.h), carried with its length.
+///   hubwire::List<int16_t, 8> path;   expose("path", path).writable()
+template <typename T, size_t N>
+constexpr Decl<T, kVariable> expose(const char* name, ::hubwire::List<T, N>& list) {
+  return checkValue<T, 1 + N * sizeof(T)>(),
+         Decl<T, kVariable>(name, nullptr, &list, listOf(TypeOf<T>::code), (uint8_t)N, kVoid, kReadable, nullptr, nullptr);
 }
 
 /// A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
@@ -297,6 +324,23 @@ constexpr Decl<T, kControl, void (*)(T)> control(const char* name, void (*fn)(T)
 template <typename T>
 constexpr Decl<T, kControl, bool (*)(T)> control(const char* name, bool (*fn)(T)) {
   return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
+}
+
+/// A control taking a List (list.h): fn gets the hub's elements.
+///   void setPath(const hubwire::List<int16_t, 8>& p);   control("path", setPath)
+template <typename T, size_t N>
+constexpr Decl<T, kControl, void (*)(const ::hubwire::List<T, N>&)> control(const char* name,
+                                                                           void (*fn)(const ::hubwire::List<T, N>&)) {
+  return checkValue<T, 1 + N * sizeof(T)>(),
+         Decl<T, kControl, void (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N,
+                                                                    kVoid, kWritable, fn, &callListVoid< ::hubwire::List<T, N> >);
+}
+template <typename T, size_t N>
+constexpr Decl<T, kControl, bool (*)(const ::hubwire::List<T, N>&)> control(const char* name,
+                                                                           bool (*fn)(const ::hubwire::List<T, N>&)) {
+  return checkValue<T, 1 + N * sizeof(T)>(),
+         Decl<T, kControl, bool (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N,
+                                                                    kVoid, kWritable, fn, &callListChecked< ::hubwire::List<T, N> >);
 }
 
 /// A callable action: the hub calls fn with an argument (or none) and gets its return value.
@@ -318,11 +362,29 @@ constexpr Decl<NotNumeric, kAction> action(const char* name, void (*fn)()) {
   return Decl<NotNumeric, kAction>(name, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
 }
 
+/// An action taking a List (list.h).
+///   uint8_t sum(const hubwire::List<uint8_t, 16>& v);   action("sum", sum)
+template <typename R, typename T, size_t N>
+constexpr Decl<T, kAction, R (*)(const ::hubwire::List<T, N>&)> action(const char* name, R (*fn)(const ::hubwire::List<T, N>&)) {
+  return checkValue<T, 1 + N * sizeof(T)>(), checkReturn<R>(),
+         Decl<T, kAction, R (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N,
+                                                                TypeOf<R>::code, kCallable, fn, &callListRet<R, ::hubwire::List<T, N> >);
+}
+template <typename T, size_t N>
+constexpr Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)> action(const char* name,
+                                                                         void (*fn)(const ::hubwire::List<T, N>&)) {
+  return checkValue<T, 1 + N * sizeof(T)>(),
+         Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N, kVoid,
+                                                                   kCallable, fn, &callListVoid< ::hubwire::List<T, N> >);
+}
+
 /// An event the sketch emits with emit(); the hub is told exactly once.
 ///   event("bumper", bumper)
 template <typename T>
 constexpr Decl<NotNumeric, kEvent> event(const char* name, Event<T>& ev) {
-  static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD, "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it");
+  static_assert(sizeof(T) <= HUBWIRE_EVENT_MAX_PAYLOAD,
+                "event value larger than HUBWIRE_EVENT_MAX_PAYLOAD: raise it (events are never fragmented: emit a "
+                "notice and let the hub read a large value)");
   return checkValue<T, sizeof(T)>(), Decl<NotNumeric, kEvent>(name, nullptr, &ev.id, TypeOf<T>::code, 0, kVoid, kEventAccess, nullptr, nullptr);
 }
 

@@ -86,6 +86,17 @@ constexpr size_t layoutSizeAfter(const char* s, size_t next, size_t off, size_t 
 }
 constexpr size_t layoutSize(const char* s) { return *s ? layoutFieldSize(s, 0, 0, 1) : kBadLayout; }
 
+// A well-formed layout's size on the wire: its fields packed, without alignment.
+constexpr size_t layoutWireAfter(const char* s, size_t next, size_t acc);
+constexpr size_t layoutWireField(const char* s, size_t j, size_t acc) {
+  return layoutWireAfter(s, fieldEnd(s, typeEnd(s, colonAt(s, j) + 1)),
+                         acc + scalarBytes(layoutTypeAt(s, colonAt(s, j) + 1)) * countOf(s, typeEnd(s, colonAt(s, j) + 1)));
+}
+constexpr size_t layoutWireAfter(const char* s, size_t next, size_t acc) {
+  return s[next] == ',' ? layoutWireField(s, next + 1, acc) : acc;
+}
+constexpr size_t layoutWireSize(const char* s) { return *s ? layoutWireField(s, 0, 0) : 0; }
+
 }  // namespace declare
 }  // namespace hubwire
 

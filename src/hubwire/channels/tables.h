@@ -233,6 +233,7 @@ struct Checked {
   static_assert(validName(DeclAt<D, Decls, I>::decl.name()),
                 "channel name: letters, digits and _ only, not starting with a digit, at most 32 characters");
   static_assert(DeclAt<D, Decls, I>::decl.rangeOrdered(), "range(min, max): min is greater than max");
+  static_assert(!DeclAt<D, Decls, I>::decl.listWithFailsafe(), "failsafe(): a List has no failsafe value");
   static_assert(DeclAt<D, Decls, I>::decl.valuesFit(),
                 "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
 };
@@ -329,6 +330,15 @@ constexpr uint16_t featuresOf(const List<>&) { return 0; }
 template <typename H, typename... R>
 constexpr uint16_t featuresOf(const List<H, R...>& l) {
   return (uint16_t)(l.head.features() | featuresOf(l.tail));
+}
+
+// The reassembly buffer the list needs: its largest value written or passed in that does not fit
+// a frame (session/fragments.h), 0 for none.
+constexpr uint16_t largeInOf(const List<>&) { return 0; }
+constexpr uint16_t larger(uint16_t a, uint16_t b) { return a > b ? a : b; }
+template <typename H, typename... R>
+constexpr uint16_t largeInOf(const List<H, R...>& l) {
+  return larger(l.head.largeIn(), largeInOf(l.tail));  // once each: a list of 254 stays linear
 }
 
 // json and infos: the sketch's copies of Stored<D, Decls>::json() and infos(), in flash.

@@ -35,6 +35,14 @@ static void fromFlash(void* to, const void* from, size_t n) {
 #endif
 }
 
+// A list's elements (its count first) against the channel's range.
+static ErrorCode listInRange(const ChannelLimits& lim, TypeCode code, const uint8_t* wire) {
+  uint8_t size = scalarSize(elementOf(code));
+  for (uint8_t i = 0; i < wire[0]; ++i)
+    if (!lim.inRange(wire + 1 + i * size, &lim.min, &lim.max)) return kErrOutOfRange;
+  return kOk;
+}
+
 bool Session::find(uint8_t id, ChannelInfo& ch) {
   if (id == 0 || id > table_.count) return false;
   fromFlash(&ch, &table_.channels[id - 1], sizeof(ch));
@@ -146,6 +154,7 @@ void Session::handle(const Frame& f) {
     case kMsgSubscribe:
       break;
     default:
+      if (HubwireLarge<true, void>::receive && f.type == kMsgFragment) return HubwireLarge<true, void>::receive(*this, f);
       if (hubHook(*this, true)) return;  // hub events, answers to the device's requests
       ++rx_.counters.dropped;
       sendNak(f, kErrUnknownType);
@@ -268,6 +277,8 @@ void Session::onRequest(const Frame& f) {
     return sendNak(f, kErrUnknownChannel);
   }
   if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
+  if (HubwireLarge<true, void>::send && f.len == 0)  // a value that may not fit one frame (fragments.cpp)
+    return (void)HubwireLarge<true, void>::send(*this, kMsgResponse, f.seq, f.id, ch, nullptr, 0, false);
   // Not sent at all when the hub could not take it (its hello said how much it accepts).
   if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
   reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
@@ -283,11 +294,12 @@ void Session::onControl(const Frame& f) {
     code = kErrNotWritable;
   } else {
     const ValueType& t = ch.type;
-    code = t.check(f.payload, f.len);
+    code = t.check(f.payload, wholeLength(f));  // f.len, or a reassembled control's (fragments.h)
     if (code == kOk && uses(kUsesRanges) && (ch.flags & kHasRange)) {
       ChannelLimits lim;
       fromFlash(&lim, ch.limits, sizeof(lim));
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
+      if (uses(kUsesLists) && isListCode(t.code)) code = listInRange(lim, t.code, f.payload), n = 0;  // every element
       for (uint8_t i = 0; i < n && code == kOk; ++i)
         if (!lim.inRange(f.payload + i * size, &lim.min, &lim.max)) code = kErrOutOfRange;
     }
@@ -301,7 +313,7 @@ void Session::onControl(const Frame& f) {
           len = scalarSize(ch.ret);
         }
       } else if (uses(kUsesWrites)) {
-        t.fromWire(f.payload, f.len, ch.data);
+        t.fromWire(f.payload, wholeLength(f), ch.data);
         if (ch.call) functionAt<void (*)()>(ch.call)();
       }
     }
@@ -322,7 +334,8 @@ void Session::onSubscribe(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
   if (!uses(kUsesStreams) || !(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
-  if (f.len != 2 || ch.type.wireSize() + kSampleHeader > maxOut()) return sendNak(f, kErrBadLength);
+  if (f.len != 2 || (!HubwireLarge<true, void>::send && ch.type.wireSize() + kSampleHeader > maxOut()))
+    return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
   if (!streams_.subscribe(f.id, interval, ms())) return sendNak(f, kErrBusy);
@@ -341,6 +354,12 @@ void Session::sendSamples(uint16_t now) {
     ChannelInfo ch;
     if (!find(s.id, ch)) {
       s.id = 0;
+      continue;
+    }
+    if (HubwireLarge<true, void>::send) {  // a sample too large for one frame goes as fragments
+      uint8_t since[kSampleHeader];
+      storeU16(since, s.since(now));
+      if (HubwireLarge<true, void>::send(*this, kMsgSample, s.seq, s.id, ch, since, kSampleHeader, true)) s.sent(now);
       continue;
     }
     uint8_t* out = tx_.payload();

@@ -20,6 +20,7 @@
 #include "../wire/messages.h"
 #include "../wire/values.h"
 #include "event_queue.h"
+#include "fragments.h"
 #include "hub_link.h"
 #include "streams.h"
 
@@ -214,6 +215,11 @@ class Session : private SessionState {
   void hubEvent(const Frame& f);
   void hubBind(const Frame& f);
   void hubPoll(uint16_t now);
+
+  // Values too long for one frame (fragments.cpp), reached only where the sketch declares one.
+  friend void fragmentReceived(Session& s, const Frame& f);
+  friend bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch,
+                        const uint8_t* prefix, uint8_t prefixLen, bool room);
 
   bool find(uint8_t id, ChannelInfo& ch);  // ch describes channel id afterwards
   void applyFailsafes();

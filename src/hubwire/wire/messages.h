@@ -21,6 +21,7 @@ enum MessageType : uint8_t {
   kMsgEvent = '!',
   kMsgSubscribe = 'S',
   kMsgSample = 'D',
+  kMsgFragment = 'F',  // a piece of a message too long for one frame (PROTOCOL.md 12)
 };
 
 enum HelloFlags : uint8_t { kHelloDevice = 1, kHelloReply = 2, kHelloF64 = 4 };
@@ -32,6 +33,7 @@ const uint8_t kHeartbeatSize = 10;
 const uint8_t kChunkRequestSize = 3;
 const uint8_t kChunkHeader = 4;
 const uint8_t kSampleHeader = 2;
+const uint8_t kFragmentHeader = 5;  // carried type, offset (u16), total (u16)
 
 // FNV-1a 32, the descriptor hash carried in hello.
 const uint32_t kFnvOffset = 0x811C9DC5UL;

@@ -157,9 +157,34 @@ ErrorCode structCheck(Text layout, const uint8_t* wire, uint16_t len) {
   return kOk;
 }
 
+// Bytes [lo, lo + n) of a struct's wire form, field by field from its aligned memory form.
+uint16_t structWireRange(Text layout, const StructWindow* w, uint8_t* out, uint16_t n) {
+  const uint8_t* mem = (const uint8_t*)w->mem;
+  uint16_t memOff = 0, wireOff = 0, lo = w->offset, hi = (uint16_t)(w->offset + n);
+  LayoutReader r(layout);
+  LayoutField f;
+  while (r.next(f) && wireOff < hi) {
+    // (fieldBytes() and alignUp() spelled out: one more caller would change how the compiler
+    // inlines them into the struct codec of every sketch)
+    uint16_t k = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
+    uint8_t align = alignOf(f.code);
+    memOff = (uint16_t)((memOff + align - 1) / align * align);
+    uint16_t a = wireOff > lo ? wireOff : lo, b = wireOff + k < hi ? (uint16_t)(wireOff + k) : hi;
+    if (a < b) memcpy(out + (a - lo), mem + memOff + (a - wireOff), (size_t)(b - a));
+    memOff = (uint16_t)(memOff + k);
+    wireOff = (uint16_t)(wireOff + k);
+  }
+  return n;
+}
+
+// A list's elements start at their own alignment after the count byte.
+uint8_t listItems(TypeCode code) { return alignOf(elementOf(code)); }
+
 }  // namespace
 
 uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len) {
+  if (uses(kUsesLarge) && op == kStructWireRange)
+    return structWireRange(layout, (const StructWindow*)in, (uint8_t*)out, len);
   switch (op) {
     case kStructWireSize:
       return structWireSize(layout);
@@ -177,12 +202,17 @@ uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16
 }
 
 uint16_t ValueType::wireSize() const {
+  if (uses(kUsesLists) && isListCode(code)) return (uint16_t)(1 + count * scalarSize(elementOf(code)));
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(1 + count);
   if (uses(kUsesStructs) && code == kStruct) return structs(kStructWireSize, layout, nullptr, nullptr, 0);
   return (uint16_t)(scalarSize(code) * (count ? count : 1));
 }
 
 uint16_t ValueType::memSize() const {
+  if (uses(kUsesLists) && isListCode(code)) {
+    uint8_t a = listItems(code);
+    return alignUp((uint16_t)(a + count * scalarSize(elementOf(code))), a);
+  }
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
   if (uses(kUsesStructs) && code == kStruct) return structs(kStructMemSize, layout, nullptr, nullptr, 0);
   return wireSize();
@@ -190,6 +220,12 @@ uint16_t ValueType::memSize() const {
 
 uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
   const uint8_t* m = (const uint8_t*)mem;
+  if (uses(kUsesLists) && isListCode(code)) {
+    uint16_t n = wireLength(mem);
+    wire[0] = m[0] < count ? m[0] : count;
+    memcpy(wire + 1, m + listItems(code), n - 1u);
+    return n;
+  }
   if (uses(kUsesStrings) && code == kStr) {
     uint8_t n = 0;
     while (n < count && m[n]) ++n;
@@ -204,6 +240,12 @@ uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
 }
 
 ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
+  if (uses(kUsesLists) && isListCode(code)) {  // as a string: the count first, then the length it implies
+    if (len < 1) return kErrBadLength;
+    if (wire[0] > count) return kErrBadValue;
+    if (len != 1u + wire[0] * scalarSize(elementOf(code))) return kErrBadLength;
+    return boolsValid(elementOf(code), wire + 1, (uint16_t)(len - 1)) ? kOk : kErrBadValue;
+  }
   if (uses(kUsesStrings) && code == kStr) {  // the length byte is judged first, then the payload against it
     if (len < 1) return kErrBadLength;
     if (wire[0] > count) return kErrBadValue;
@@ -216,6 +258,11 @@ ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
 
 void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
   uint8_t* m = (uint8_t*)mem;
+  if (uses(kUsesLists) && isListCode(code)) {
+    m[0] = wire[0];
+    memcpy(m + listItems(code), wire + 1, len - 1u);
+    return;
+  }
   if (uses(kUsesStrings) && code == kStr) {
     memcpy(m, wire + 1, wire[0]);
     m[wire[0]] = 0;
@@ -224,6 +271,42 @@ void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
   } else {
     memcpy(m, wire, len);
   }
+}
+
+uint16_t ValueType::wireLength(const void* mem) const {
+  const uint8_t* m = (const uint8_t*)mem;
+  if (uses(kUsesLists) && isListCode(code)) {
+    uint8_t n = m[0] < count ? m[0] : count;  // a sketch that overfilled count sends what fits
+    return (uint16_t)(1 + n * scalarSize(elementOf(code)));
+  }
+  if (uses(kUsesStrings) && code == kStr) {
+    uint8_t n = 0;
+    while (n < count && m[n]) ++n;
+    return (uint16_t)(n + 1);
+  }
+  return wireSize();
+}
+
+void ValueType::wireRange(const void* mem, uint16_t offset, uint8_t* out, uint16_t n) const {
+  const uint8_t* m = (const uint8_t*)mem;
+  if (n == 0) return;
+  if (uses(kUsesStructs) && code == kStruct) {
+    StructWindow w = {mem, offset};
+    structs(kStructWireRange, layout, &w, out, n);
+    return;
+  }
+  bool counted = (uses(kUsesLists) && isListCode(code)) || (uses(kUsesStrings) && code == kStr);
+  if (!counted) {
+    memcpy(out, m + offset, n);
+    return;
+  }
+  if (offset == 0) {  // the count byte, then the elements
+    *out++ = code == kStr ? (uint8_t)(wireLength(mem) - 1) : m[0] < count ? m[0] : count;
+    --n;
+    offset = 1;
+  }
+  uint8_t items = code == kStr ? 0 : listItems(code);
+  memcpy(out, m + items + offset - 1, n);
 }
 
 }  // namespace hubwire

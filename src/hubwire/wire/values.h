@@ -26,6 +26,13 @@ enum TypeCode : uint8_t {
   kTypeCount
 };
 
+// A hubwire::List of scalars (channels/list.h): the element's code with this bit set; count is the
+// capacity. Memory: a count byte, then the elements at their alignment.
+const uint8_t kListFlag = 0x80;
+constexpr TypeCode listOf(TypeCode t) { return (TypeCode)(t | kListFlag); }
+constexpr bool isListCode(TypeCode t) { return (t & kListFlag) != 0; }
+constexpr TypeCode elementOf(TypeCode t) { return (TypeCode)(t & ~kListFlag); }
+
 // NAK error codes (docs/PROTOCOL.md 5).
 enum ErrorCode : uint8_t {
   kOk = 0,
@@ -92,6 +99,13 @@ class LayoutReader {
 // refers to: a sketch that declares no struct links none of it (about 1 KB of flash on AVR). One
 // function rather than a table of them, because AVR keeps such tables in RAM.
 enum StructOp : uint8_t { kStructWireSize, kStructMemSize, kStructToWire, kStructCheck, kStructFromWire };
+// One more op, outside the enum so that the codec's switch stays as it was for sketches without
+// large values: in = a StructWindow, out = wire bytes window.offset .. + len.
+const StructOp kStructWireRange = (StructOp)5;
+struct StructWindow {
+  const void* mem;
+  uint16_t offset;
+};
 // kStructToWire: in = memory, out = wire. kStructCheck: in = wire, len. kStructFromWire: in = wire,
 // out = memory.
 typedef uint16_t (*StructCodec)(StructOp op, Text layout, const void* in, void* out, uint16_t len);
@@ -114,6 +128,11 @@ struct ValueType {
   ErrorCode check(const uint8_t* wire, uint16_t len) const;
   // Copies a checked wire value into memory.
   void fromWire(const uint8_t* wire, uint16_t len, void* mem) const;
+  // The wire length of the value in memory (a list's or string's actual length, else wireSize()).
+  uint16_t wireLength(const void* mem) const;
+  // Bytes offset .. offset+n-1 of the value's wire form, straight from memory (fragments:
+  // no buffer holds the whole value).
+  void wireRange(const void* mem, uint16_t offset, uint8_t* out, uint16_t n) const;
 };
 
 }  // namespace hubwire

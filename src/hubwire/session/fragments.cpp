@@ -1,0 +1,100 @@
+#include "fragments.h"
+
+#include <string.h>
+
+#include "../wire/bytes.h"
+#include "../wire/messages.h"
+#include "session.h"
+
+namespace hubwire {
+
+namespace {
+
+// Messages a device answers: one too large for it gets NAK BAD_LENGTH instead of silence.
+bool answered(uint8_t type) {
+  return type == kMsgRequest || type == kMsgControl || type == kMsgChunk || type == kMsgSubscribe;
+}
+
+}  // namespace
+
+void fragmentReceived(Session& s, const Frame& f) {
+  Reassembly* r = HubwireLarge<true, void>::state;
+  uint16_t capacity = r ? HubwireLarge<true, void>::capacity : 0;
+  if (f.len <= kFragmentHeader) {
+    ++s.rx_.counters.dropped;
+    return;
+  }
+  const uint8_t* p = f.payload;
+  uint8_t type = p[0];
+  uint16_t offset = loadU16(p + 1), total = loadU16(p + 3), n = (uint16_t)(f.len - kFragmentHeader);
+  if (offset == 0) {  // a new message: whatever was in progress is abandoned
+    if (r) r->total = 0;
+    if (total > capacity && total >= n) {
+      if (answered(type)) return s.sendNak(f, kErrBadLength);  // seq and id are the carried message's
+      ++s.rx_.counters.overflow;
+      return;
+    }
+    if (total < n || type == kMsgFragment) {
+      ++s.rx_.counters.dropped;
+      return;
+    }
+    r->type = type;
+    r->seq = f.seq;
+    r->id = f.id;
+    r->total = total;
+    r->next = 0;
+  } else if (!r || r->total == 0 || type != r->type || f.seq != r->seq || f.id != r->id || total != r->total ||
+             offset != r->next || total - offset < n) {
+    // Lost, repeated, reordered or foreign: the value is abandoned, never delivered torn.
+    if (r) r->total = 0;
+    ++s.rx_.counters.dropped;
+    return;
+  }
+  uint8_t* data = reassemblyData(r);
+  memcpy(data + offset, p + kFragmentHeader, n);
+  r->next = (uint16_t)(offset + n);
+  if (r->next != total) return;
+  r->total = 0;
+  if (!answered(type)) {  // the hub sends the device nothing else this long (hub values fit a frame)
+    ++s.rx_.counters.dropped;
+    return;
+  }
+  // Handled as if it had come in one frame. len 0xFF is what no R, J or S carries (they answer
+  // BAD_LENGTH, as for a long one); a control reads the whole length (wholeLength(): r->next).
+  Frame whole = {type, f.seq, f.id, 0xFF, data};
+  s.handle(whole);
+}
+
+bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch, const uint8_t* prefix,
+               uint8_t prefixLen, bool room) {
+  uint16_t total = (uint16_t)(prefixLen + ch.type.wireLength(ch.data));
+  uint8_t* out = s.tx_.payload();
+  uint8_t max = s.maxOut();
+  if (total <= max) {  // a list that is not full may fit after all
+    if (room && portWritable(s.port_) < FrameWriter::wireSize(total)) return false;
+    memcpy(out, prefix, prefixLen);
+    ch.type.toWire(ch.data, out + prefixLen);
+    s.tx_.send(s.port_, type, seq, id, (uint8_t)total);
+    return true;
+  }
+  uint8_t per = (uint8_t)(max - kFragmentHeader);  // max >= 16
+  if (room && portWritable(s.port_) < FrameWriter::wireSize(max)) return false;
+  // Back to back, offset 0 first; the sketch's loop() does not run in between: one snapshot.
+  for (uint16_t offset = 0; offset < total; offset = (uint16_t)(offset + per)) {
+    uint16_t n = total - offset < per ? (uint16_t)(total - offset) : per;
+    out[0] = type;
+    storeU16(out + 1, offset);
+    storeU16(out + 3, total);
+    uint8_t* at = out + kFragmentHeader;
+    uint16_t from = offset, left = n;
+    while (from < prefixLen && left) {
+      *at++ = prefix[from++];
+      --left;
+    }
+    ch.type.wireRange(ch.data, (uint16_t)(from - prefixLen), at, left);
+    s.tx_.send(s.port_, kMsgFragment, seq, id, (uint8_t)(kFragmentHeader + n));
+  }
+  return true;
+}
+
+}  // namespace hubwire
