@@ -158,3 +158,21 @@ def test_a_lossy_link_never_tears_or_repeats_a_large_value(tmp_path: pathlib.Pat
     assert stats["d2h"]["bytes_dropped"] + stats["d2h"]["frames_duplicated"] > 0
     assert fake.dropped > 0  # the device abandoned reassemblies, and its retried writes were answered again
     assert hub_refused > 0  # and so did the hub with the device's answers
+
+
+def test_the_cli_parses_and_formats_lists() -> None:
+    from hubwire.cli_support import fmt_value, jsonable
+    from hubwire.wire.values import codec_for
+
+    c = codec_for({"t": "i16", "vc": 4})
+    assert c.parse_text("10,-20, 30") == [10, -20, 30]
+    assert c.parse_text("[1, 2]") == [1, 2]
+    assert c.parse_text("") == [] and c.parse_text("[]") == []
+    assert codec_for({"t": "bool", "vc": 3}).parse_text("true,0,on") == [True, False, True]
+    for text, code in (("1,2,3,4,5", NakCode.BAD_VALUE), ("1,x", NakCode.BAD_VALUE), ("[1,", NakCode.BAD_VALUE),
+                       ("40000", NakCode.OUT_OF_RANGE)):
+        with pytest.raises(InvalidValue) as e:
+            c.parse_text(text)
+        assert e.value.code == code, text
+    assert fmt_value([1.5, -2.0]) == "[1.5, -2]" and fmt_value([]) == "[]"
+    assert jsonable([1, 2]) == [1, 2]
