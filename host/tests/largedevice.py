@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from hubwire.descriptor import Channel, parse_descriptor
@@ -66,6 +67,8 @@ class LargeDevice(PtyPeer):
         #: lose the answers to this many applied controls (the hub retries); duplicates answered again
         self.lose_answers = 0
         self.duplicates = 0
+        #: seconds between two fragments of the device's answers (0: back to back)
+        self.fragment_gap = 0.0
         self.subscribes: List[Tuple[int, int]] = []
         self.refused_totals = 0
         self.fragments_in = 0
@@ -76,9 +79,16 @@ class LargeDevice(PtyPeer):
     def reply(self, t: int, seq: int, cid: int, payload: bytes = b"") -> bytes:
         """Send a message, in fragments of the device's own frame size when it is large."""
         wire = encode_message(t, seq, cid, payload, self.max_payload)
-        if not self.mute:
-            with self.lock:
-                os.write(self.master, wire)
+        if self.mute:
+            return wire
+        if self.fragment_gap and len(payload) > self.max_payload:  # a slow line: one frame at a time
+            for frame in wire.split(b"\x00")[:-1]:
+                with self.lock:
+                    os.write(self.master, frame + b"\x00")
+                time.sleep(self.fragment_gap)
+            return wire
+        with self.lock:
+            os.write(self.master, wire)
         return wire
 
     def sample(self, cid: int, seq: int) -> None:

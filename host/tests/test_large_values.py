@@ -68,6 +68,20 @@ def test_a_retried_large_write_is_reassembled_again_and_applied_once(pair: Tuple
     assert as_json(dev.mid) == mid_value(4)
 
 
+def test_the_hub_waits_for_a_large_answer_that_keeps_coming(tmp_path: pathlib.Path) -> None:
+    """A read whose answer takes longer than the retry timeout on the line is not asked again while
+    its fragments keep arriving (PROTOCOL.md 12.6)."""
+    with LargeDevice() as fake, hubwire.connect(fake.path, cache_dir=tmp_path, retry_timeout=0.3, tries=2) as dev:
+        dev.mid = mid_value(2)
+        fake.fragment_gap = 0.1  # 8 fragments: about 0.8 s, more than both tries' 0.6 s
+        assert as_json(dev.mid) == mid_value(2)
+        assert dev.session.stats.retries == 0
+        fake.fragment_gap = 0.0
+        before = dev.session.core.link.reassembler.completed
+        assert as_json(dev.mid) == mid_value(2)
+        assert dev.session.core.link.reassembler.completed == before + 1
+
+
 def test_large_arguments_and_results_of_actions(pair: Tuple[LargeDevice, Any]) -> None:
     fake, dev = pair
     v = mid_value(9)
