@@ -31,7 +31,7 @@ def fmt_value(v: Any) -> str:
         return f"{v:.6g}"
     if isinstance(v, tuple) and hasattr(v, "_asdict"):
         return "{" + ", ".join(f"{k}: {fmt_value(x)}" for k, x in v._asdict().items()) + "}"
-    if isinstance(v, tuple):
+    if isinstance(v, (tuple, list)):
         return "[" + ", ".join(fmt_value(x) for x in v) + "]"
     if isinstance(v, str):
         return json.dumps(v, ensure_ascii=False)

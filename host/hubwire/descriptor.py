@@ -14,7 +14,7 @@ from typing import Any, Dict, Optional, Tuple
 from .errors import InvalidValue
 from .wire.values import Codec
 
-__all__ = ["MAX_DESCRIPTOR_SIZE", "MAX_DEPTH", "Channel", "Descriptor", "parse_descriptor"]
+__all__ = ["MAX_DESCRIPTOR_SIZE", "MAX_DEPTH", "MAX_VALUE", "Channel", "Descriptor", "parse_descriptor"]
 
 #: largest descriptor the hub accepts, bytes
 MAX_DESCRIPTOR_SIZE = 16 * 1024
@@ -25,7 +25,11 @@ NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 NAME_MAX = 32
 ACCESS_LETTERS = "rwces"
 TOP_KEYS = {"p", "n", "fw", "ch", "hub"}
-CHANNEL_KEYS = {"id", "n", "a", "t", "c", "f", "rt", "rc", "u", "min", "max", "fs", "d"}
+CHANNEL_KEYS = {"id", "n", "a", "t", "c", "vc", "f", "rt", "rc", "rvc", "u", "min", "max", "fs", "d"}
+#: largest value (payload) a descriptor may declare: a fragment's u16 total (PROTOCOL.md 12)
+MAX_VALUE = 0xFFFF
+#: largest capacity of a variable-length array: its count is one byte
+MAX_LIST = 255
 FIELD_KEYS = {"n", "t", "c"}
 
 
@@ -93,7 +97,7 @@ class Channel:
         if self.min is not None or self.max is not None:
             from .wire.messages import NakCode
 
-            items = v if isinstance(v, tuple) else (v,)
+            items = v if isinstance(v, (tuple, list)) else (v,)
             for x in items:
                 if (x != x  # NaN: never inside a declared range
                         or (self.min is not None and x < self.min) or (self.max is not None and x > self.max)):

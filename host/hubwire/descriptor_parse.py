@@ -6,8 +6,8 @@ import json
 import math
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
-from .descriptor import (ACCESS_LETTERS, CHANNEL_KEYS, FIELD_KEYS, MAX_DEPTH, MAX_DESCRIPTOR_SIZE, NAME_MAX, NAME_RE,
-                         TOP_KEYS, Channel, Descriptor)
+from .descriptor import (ACCESS_LETTERS, CHANNEL_KEYS, FIELD_KEYS, MAX_DEPTH, MAX_DESCRIPTOR_SIZE, MAX_LIST, MAX_VALUE,
+                         NAME_MAX, NAME_RE, TOP_KEYS, Channel, Descriptor)
 from .errors import DescriptorError, InvalidValue
 from .text import clip, clip_json, clip_list
 from .wire.frame import PROTOCOL_MAX_PAYLOAD
@@ -101,16 +101,24 @@ def _count(where: str, obj: Mapping[str, Any], key: str, maximum: int, what: str
     return int(c)
 
 
-def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tuple[str, ...]) -> Dict[str, Any]:
-    """Validate a (t, c) pair; ``allow`` lists the non-scalar type names allowed here."""
+def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tuple[str, ...],
+              vkey: str = "") -> Dict[str, Any]:
+    """Validate a (t, c) pair, or (t, vc) where ``vkey`` names the variable-length count that is
+    allowed here; ``allow`` lists the non-scalar type names allowed here."""
     if not isinstance(t, str):
         raise _fail(where, f"type must be a string, got {clip_json(t)}")
+    if vkey and vkey in c_obj:
+        if t not in SCALARS:
+            raise _fail(where, f"a variable-length array '{vkey}' needs a scalar type, not {clip(t)}")
+        if ckey in c_obj:
+            raise _fail(where, f"'{ckey}' and '{vkey}' exclude each other (fixed or variable length)")
+        return {"t": t, "vc": _count(where, c_obj, vkey, MAX_LIST, "variable-length array capacity")}
     if t in SCALARS:
-        c = _count(where, c_obj, ckey, PROTOCOL_MAX_PAYLOAD, "array count")
+        c = _count(where, c_obj, ckey, MAX_VALUE, "array count")
         out: Dict[str, Any] = {"t": t}
         if c is not None:
-            if c * SCALARS[t][1] > PROTOCOL_MAX_PAYLOAD:
-                raise _fail(where, f"{t}[{c}] is {c * SCALARS[t][1]} bytes, more than a frame's 255")
+            if c * SCALARS[t][1] > MAX_VALUE:
+                raise _fail(where, f"{t}[{c}] is {c * SCALARS[t][1]} bytes, more than the largest value, {MAX_VALUE}")
             out["c"] = c
         return out
     if t not in allow:
@@ -133,8 +141,8 @@ def _type_obj(where: str, t: Any, c_obj: Mapping[str, Any], ckey: str, allow: Tu
 def _fields(where: str, ch: Mapping[str, Any]) -> List[Dict[str, Any]]:
     if "f" not in ch:
         raise _fail(where, "a struct needs its fields 'f'")
-    if "c" in ch:
-        raise _fail(where, "a struct channel takes no count 'c' (arrays of structs are not supported)")
+    if "c" in ch or "vc" in ch:
+        raise _fail(where, "a struct channel takes no count 'c'/'vc' (arrays of structs are not supported)")
     fs = ch["f"]
     if not isinstance(fs, list) or not fs:
         raise _fail(where, "struct fields 'f' must be a non-empty list")
@@ -154,8 +162,8 @@ def _fields(where: str, ch: Mapping[str, Any]) -> List[Dict[str, Any]]:
         to = _type_obj(fw, f["t"], f, "c", ())
         size += SCALARS[to["t"]][1] * to.get("c", 1)
         out.append({"n": n, **to})
-    if size > PROTOCOL_MAX_PAYLOAD:
-        raise _fail(where, f"struct is {size} bytes, more than a frame's 255")
+    if size > MAX_VALUE:
+        raise _fail(where, f"struct is {size} bytes, more than the largest value, {MAX_VALUE}")
     return out
 
 
@@ -189,19 +197,19 @@ def _channel_type(where: str, ch: Mapping[str, Any], name: str, a: str) -> Tuple
         if "f" in ch:
             raise _fail(where, "fields 'f' are only for type 'struct'")
         allow = ("str", "struct", "void") if callable_ else ("str", "struct")
-        type_obj = _type_obj(where, t, ch, "c", allow)
+        type_obj = _type_obj(where, t, ch, "c", allow, "vc")
     returns = None
-    if "rt" in ch or "rc" in ch:
+    if "rt" in ch or "rc" in ch or "rvc" in ch:
         if not callable_:
-            raise _fail(where, "return type 'rt'/'rc' is only for callable channels")
+            raise _fail(where, "return type 'rt'/'rc'/'rvc' is only for callable channels")
         if "rt" not in ch:
-            raise _fail(where, "'rc' given without a return type 'rt'")
-        rto = _type_obj(where + " return", ch["rt"], ch, "rc", ("str", "void"))
+            raise _fail(where, "'rc'/'rvc' given without a return type 'rt'")
+        rto = _type_obj(where + " return", ch["rt"], ch, "rc", ("str", "void"), "rvc")
         returns = codec_for(rto, where=f"{name} return value", class_name=f"{name}_result")
     elif callable_:
         returns = codec_for({"t": "void"})
     codec = codec_for(type_obj, where=name, class_name=name)
-    if "s" in a and codec.max_size + 2 > PROTOCOL_MAX_PAYLOAD:
+    if "s" in a and codec.max_size + 2 > MAX_VALUE:
         raise _fail(where, f"a streamable value of {codec.max_size} bytes does not fit a sample frame")
     return type_obj, codec, returns
 
@@ -217,7 +225,7 @@ def _range(where: str, ch: Mapping[str, Any], a: str, codec: Codec) -> Tuple[Any
     lo, hi = ch.get("min"), ch.get("max")
     if lo is None and hi is None:
         return lo, hi
-    if "e" in a or codec.scalar not in NUMERIC_TYPES or codec.kind not in ("scalar", "array"):
+    if "e" in a or codec.scalar not in NUMERIC_TYPES or codec.kind not in ("scalar", "array", "list"):
         raise _fail(where, f"'min'/'max' are only for numeric types, not {codec.name}")
     for key, v in (("min", lo), ("max", hi)):
         if v is None:

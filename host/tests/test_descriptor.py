@@ -91,7 +91,19 @@ BAD = [
     (doc(t="str"), "needs a capacity"),
     (doc(t="str", c=255), "string capacity"),
     (doc(c=0), "array count"),
-    (doc(t="u32", c=64), "more than a frame"),
+    (doc(t="u32", c=16384), "more than the largest value, 65535"),
+    (doc(t="u8", c=65536), "array count"),
+    (doc(vc=0), "variable-length array capacity"),
+    (doc(vc=256), "variable-length array capacity"),
+    (doc(vc=4, c=4), "exclude each other"),
+    (doc(t="str", vc=4), "needs a scalar type"),
+    (doc(t="struct", f=[{"n": "a", "t": "u8"}], vc=2), "no count"),
+    (doc(t="struct", f=[{"n": "a", "t": "u8", "vc": 2}]), "unknown key"),
+    (doc(rvc=2), "only for callable"),
+    (doc(a="c", rvc=2), "without a return type"),
+    (doc(a="c", rt="str", rvc=2), "needs a scalar type"),
+    (doc(a="c", rt="u8", rc=2, rvc=2), "exclude each other"),
+    (doc(vc=2, min=-1), "outside the u8 range"),
     (doc(t="struct"), "needs its fields"),
     (doc(t="struct", f=[]), "non-empty list"),
     (doc(t="struct", f=[{"n": "a", "t": "u8"}, {"n": "a", "t": "u8"}]), "duplicate field name"),
@@ -153,3 +165,18 @@ def test_bools_are_not_numbers_for_numeric_channels() -> None:
         with pytest.raises(InvalidValue):
             codec_for({"t": t}).check(True)
     assert codec_for({"t": "bool"}).check(True) is True
+
+
+def test_variable_length_arrays_and_large_values() -> None:
+    d = parse_descriptor(json.dumps({"p": 1, "n": "d", "ch": [
+        {"id": 1, "n": "path", "a": "rw", "t": "i16", "vc": 8, "min": -100, "max": 100},
+        {"id": 2, "n": "blob", "a": "rws", "t": "u8", "c": 1024},
+        {"id": 3, "n": "pick", "a": "c", "t": "u8", "vc": 3, "rt": "bool", "rvc": 2},
+        {"id": 4, "n": "flags", "a": "rw", "t": "bool", "vc": 2, "fs": [True]}]}))
+    path, blob, pick, flags = d.channels
+    assert (path.codec.kind, path.codec.max_size, path.type_name) == ("list", 17, "i16[<=8]")
+    assert path.type == {"t": "i16", "vc": 8}
+    assert (blob.codec.size, blob.type_name) == (1024, "u8[1024]")
+    assert pick.type_name == "(u8[<=3]) -> bool[<=2]"
+    assert pick.returns is not None and pick.returns.max_size == 3
+    assert flags.failsafe == [True]

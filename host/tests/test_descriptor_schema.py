@@ -54,3 +54,24 @@ def test_the_schema_and_the_parser_refuse_a_bad_hub_list(bad: dict) -> None:
     assert not VALIDATOR.is_valid(doc)
     with pytest.raises(ValueError):
         parse_descriptor(json.dumps(doc))
+
+
+LISTS = {"p": 1, "n": "d", "ch": [{"id": 1, "n": "path", "a": "rw", "t": "i16", "vc": 8},
+                                  {"id": 2, "n": "blob", "a": "rws", "t": "u8", "c": 1024},
+                                  {"id": 3, "n": "pick", "a": "c", "t": "u8", "vc": 3, "rt": "bool", "rvc": 2}]}
+
+
+def test_variable_length_arrays_and_large_arrays_match_the_schema() -> None:
+    VALIDATOR.validate(LISTS)
+    assert len(parse_descriptor(json.dumps(LISTS)).channels) == 3
+
+
+@pytest.mark.parametrize("change", [
+    {"vc": 0}, {"vc": 256}, {"vc": 4, "c": 4}, {"t": "str", "vc": 4}, {"rvc": 2},
+])
+def test_the_schema_and_the_parser_refuse_a_bad_variable_length_array(change: dict) -> None:
+    doc = json.loads(json.dumps(LISTS))
+    doc["ch"][0].update(change)
+    assert not VALIDATOR.is_valid(doc)
+    with pytest.raises(ValueError):
+        parse_descriptor(json.dumps(doc))

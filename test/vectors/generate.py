@@ -40,6 +40,7 @@ def _sibling(name: str) -> Any:
 
 session_rules = _sibling("session_rules")  # the session rules of PROTOCOL.md section 8
 both_frames = _sibling("both_frames")  # frames of both directions (PROTOCOL.md 10)
+large_frames = _sibling("large_frames")  # large values in fragments, variable-length arrays (PROTOCOL.md 12)
 
 # ---------------------------------------------------------------------------------------------- CRC
 
@@ -464,6 +465,14 @@ def gen_values() -> Tuple[Dict[str, Any], Dict[str, Any]]:
     add("string utf-8 (bytes counted)", {"t": "str", "c": 8}, "h\u00e9llo", "0668c3a96c6c6f")
     add("string capacity 1", {"t": "str", "c": 1}, "x", "0178")
     add("void", {"t": "void"}, None, "")
+    # variable-length arrays (appended: the vectors above stay byte for byte): count byte, then elements
+    add("list empty (u8, capacity 4)", {"t": "u8", "vc": 4}, [], "00")
+    add("list u8 [1, 2, 255]", {"t": "u8", "vc": 4}, [1, 2, 255], "030102ff")
+    add("list i16 full (capacity 3)", {"t": "i16", "vc": 3}, [-1, 0, 32767], "03ffff0000ff7f")
+    add("list f32 one element", {"t": "f32", "vc": 8}, [1.5], "010000c03f")
+    add("list bool", {"t": "bool", "vc": 4}, [True, False], "020100")
+    add("list u32 capacity 1", {"t": "u32", "vc": 1}, [7], "0107000000")
+    add("list capacity 255", {"t": "u8", "vc": 255}, [9, 8, 7], "03090807")
 
     invalid = []
 
@@ -502,12 +511,25 @@ def gen_values() -> Tuple[Dict[str, Any], Dict[str, Any]]:
     bad("string shorter than its length byte", {"t": "str", "c": 8}, "036162", "BAD_LENGTH")
     bad("string longer than its length byte", {"t": "str", "c": 8}, "02616263", "BAD_LENGTH")
     bad("void with a byte", {"t": "void"}, "00", "BAD_LENGTH")
+    # variable-length arrays: the count first (over the capacity BAD_VALUE, whatever the length),
+    # then the length (1 + n * size, else BAD_LENGTH), then the elements in order
+    bad("list empty payload (no count byte)", {"t": "u8", "vc": 4}, "", "BAD_LENGTH")
+    bad("list count > capacity", {"t": "u8", "vc": 4}, "050102030405", "BAD_VALUE")
+    bad("list count > capacity and payload short", {"t": "u8", "vc": 4}, "0501", "BAD_VALUE")
+    bad("list count byte 255, capacity 4", {"t": "i16", "vc": 4}, "ff", "BAD_VALUE")
+    bad("list shorter than its count", {"t": "i16", "vc": 4}, "02ffff00", "BAD_LENGTH")
+    bad("list longer than its count", {"t": "i16", "vc": 4}, "01ffff0000", "BAD_LENGTH")
+    bad("list with half an element", {"t": "i16", "vc": 4}, "01ff", "BAD_LENGTH")
+    bad("list count 0 with a byte", {"t": "u8", "vc": 4}, "0001", "BAD_LENGTH")
+    bad("list bool element 0x02", {"t": "bool", "vc": 4}, "020102", "BAD_VALUE")
+    bad("list bool wrong length before bad element", {"t": "bool", "vc": 4}, "0202", "BAD_LENGTH")
     return ({"description": "encode(value) == hex and decode(hex) == value for a descriptor type object. "
                             "Arrays are JSON lists, structs JSON objects, strings JSON strings, void null.",
              "vectors": vectors},
             {"description": "decode(hex) as type fails with error (the NAK code name a device answers). "
                             "Strings: a length byte over the capacity is BAD_VALUE (checked before the "
-                            "payload length); otherwise payload length != 1 + n is BAD_LENGTH.",
+                            "payload length); otherwise payload length != 1 + n is BAD_LENGTH. Lists "
+                            "(vc): likewise with the count byte, then 1 + n * size, then the elements.",
              "vectors": invalid})
 
 
@@ -523,6 +545,7 @@ def main() -> int:
         "values_invalid.json": invalid,
         "session/rules.json": session_rules.gen(),  # a folder of its own: the wire suites load *.json here
         "both/frames.json": both_frames.gen(),  # likewise: frames of both directions, with a direction
+        "large/frames.json": large_frames.gen(),  # likewise: fragments and lists, with exchanges
     }
     changed = []
     for name, doc in files.items():

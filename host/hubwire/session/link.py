@@ -28,6 +28,7 @@ from typing import Any, List, Optional
 from ..transport import Transport
 from ..wire import messages as m
 from ..wire.frame import Frame, FrameDecoder, encode_frame
+from .fragments import Reassembler, accepted, encode_message
 from .records import Stats
 
 __all__ = ["Link", "HelloOutcome", "HELLO_INTERVAL", "HUB_MAX_PAYLOAD"]
@@ -80,6 +81,8 @@ class Link:
         self.owner = owner
         self.nonce = new_nonce()
         self.decoder = FrameDecoder(HUB_MAX_PAYLOAD)
+        #: large messages from the device come in fragments (PROTOCOL.md 12)
+        self.reassembler = Reassembler(self.decoder)
         self.linked = False
         self.closed = False
         self.device_hello: Optional[m.Hello] = None
@@ -131,7 +134,17 @@ class Link:
         self.transport.write(data)
 
     def send_frame(self, type: int, seq: int, id: int, payload: bytes = b"") -> None:
-        self.transport.write(encode_frame(type, seq, id, payload))
+        """Send one message: one frame, or its fragments when the device cannot take it in one."""
+        self.transport.write(self.encode(type, seq, id, payload))
+
+    def peer_limit(self) -> int:
+        """The largest payload the device accepts in one frame (its hello's, within 16..255)."""
+        h = self.device_hello
+        return min(HUB_MAX_PAYLOAD, accepted(h.max_payload if h is not None else None))
+
+    def encode(self, type: int, seq: int, id: int, payload: bytes = b"") -> bytes:
+        """Wire bytes of a message for this device: one frame or all its fragments back to back."""
+        return encode_message(type, seq, id, payload, self.peer_limit())
 
     def _on_data(self, data: bytes) -> None:
         frames = self.decoder.feed(data)
@@ -140,7 +153,13 @@ class Link:
         now = time.monotonic()
         self.last_rx = now
         handle = self.owner.handle
-        for f in frames:
+        for frag in frames:
+            if frag.type == m.FRAGMENT:
+                whole = self.reassembler.feed(frag)
+                if whole is None:
+                    continue
+                frag = whole  # handled as if it had come in one frame
+            f = frag
             t = f.type
             try:
                 if t == m.HEARTBEAT:
@@ -155,6 +174,7 @@ class Link:
     def _on_port_lost(self, err: BaseException) -> None:
         log.info("hubwire: port %s failed: %s", self.transport.url, err)
         self.decoder.reset()
+        self.reassembler.reset()
         self.owner.port_down()
         self._reopen_delay = REOPEN_FIRST
         self._schedule_reopen()
@@ -178,6 +198,7 @@ class Link:
         # power mixes it into its own nonce, which is how its new boot is told from the old one.
         self.nonce = new_nonce()
         self.decoder.reset()
+        self.reassembler.reset()
         self._hello_tick()
 
     # -------------------------------------------------------------------------------- timers

@@ -22,10 +22,15 @@ from typing import Any, AsyncIterator, Dict, Optional, Tuple
 
 from ..errors import NakError, Timeout
 from ..wire import messages as m
-from ..wire.frame import Frame, encode_frame
+from ..wire.frame import Frame
 from ..wire.messages import NakCode
 
 __all__ = ["Pending", "GateCounts", "Gate", "Transactions"]
+
+#: a wire message longer than this is several frames (fragments)
+FRAME_MAX = 263
+#: the line speed assumed for a transport that names none (a pty, a socket)
+DEFAULT_BAUD = 115200
 
 
 class Pending:
@@ -186,7 +191,9 @@ class Transactions:
             seq = self._next_seq()
             while (seq, id) in self.pending:
                 seq = self._next_seq()
-            p = Pending(type, seq, id, encode_frame(type, seq, id, payload), loop=None if threaded else self.loop)
+            # a large payload goes out as fragments, and so does every retry (PROTOCOL.md 12)
+            p = Pending(type, seq, id, self.core.link.encode(type, seq, id, payload),
+                        loop=None if threaded else self.loop)
             self.pending[(seq, id)] = p
         return p
 
@@ -197,8 +204,13 @@ class Transactions:
 
     def transmit(self, p: Pending) -> None:
         p.tries += 1
-        p.sent_at = time.monotonic()
+        # the retry timeout runs from when the last byte is out: fragments take their time on the line
+        p.sent_at = time.monotonic() + self._line_time(len(p.wire)) if len(p.wire) > FRAME_MAX else time.monotonic()
         self.core.link.send(p.wire)
+
+    def _line_time(self, n: int) -> float:
+        baud = getattr(self.core.link.transport, "baudrate", 0) or DEFAULT_BAUD
+        return n * 10.0 / baud
 
     def retry(self, p: Pending) -> None:
         with self.lock:
@@ -206,7 +218,11 @@ class Transactions:
         self.transmit(p)
 
     def silence(self, p: Pending, what: str) -> None:
-        """No answer within the retry timeout: send again with the same seq, or Timeout after ``tries``."""
+        """No answer within the retry timeout: send again with the same seq, or Timeout after ``tries``.
+        A large answer still coming in (a fragment since the last send) is waited for instead."""
+        if self.core.link.reassembler.receiving(p.seq, p.id, p.sent_at):
+            p.sent_at = time.monotonic()
+            return
         if p.tries >= self.core.tries:
             raise Timeout(f"no answer from the device on {self.core.url}{' for ' + what if what else ''} "
                           f"after {p.tries} tries")

@@ -12,7 +12,7 @@ __all__ = [
     "PROTOCOL_VERSION", "HELLO", "HEARTBEAT", "CHUNK", "REQUEST", "RESPONSE", "CONTROL", "ACK", "NAK",
     "EVENT", "SUBSCRIBE", "SAMPLE", "TYPE_NAMES", "FLAG_DEVICE", "FLAG_REPLY", "FLAG_F64",
     "NakCode", "nak_name", "fnv1a32", "Hello", "Heartbeat", "ChunkRequest", "Chunk", "Subscribe",
-    "SubscribeAck", "Sample", "Nak", "BindReport", "describe",
+    "SubscribeAck", "Sample", "Nak", "BindReport", "describe", "FRAGMENT", "Fragment",
 ]
 
 PROTOCOL_VERSION = 1
@@ -28,10 +28,12 @@ NAK = 0x15
 EVENT = 0x21  # '!'
 SUBSCRIBE = 0x53  # 'S'
 SAMPLE = 0x44  # 'D'
+FRAGMENT = 0x46  # 'F': one piece of a message too long for one frame (PROTOCOL.md 12)
 
 TYPE_NAMES: Dict[int, str] = {
     HELLO: "hello", HEARTBEAT: "heartbeat", CHUNK: "chunk", REQUEST: "request", RESPONSE: "response",
     CONTROL: "control", ACK: "ack", NAK: "nak", EVENT: "event", SUBSCRIBE: "subscribe", SAMPLE: "sample",
+    FRAGMENT: "fragment",
 }
 
 FLAG_DEVICE = 0x01
@@ -87,6 +89,7 @@ _HEARTBEAT = struct.Struct("<HHHHH")
 _CHUNK_REQ = struct.Struct("<HB")
 _CHUNK_HDR = struct.Struct("<HH")
 _U16 = struct.Struct("<H")
+_FRAGMENT = struct.Struct("<BHH")
 
 
 @dataclass(frozen=True)
@@ -282,6 +285,29 @@ class BindReport:
         return cls(payload[0], tuple(payload[1:]))
 
 
+@dataclass(frozen=True)
+class Fragment:
+    """Fragment payload (§12): the carried message's ``type``, where ``data`` sits in its payload
+    (``offset``) and the payload's ``total`` length; the frame's seq and id are the carried message's."""
+
+    type: int
+    offset: int
+    total: int
+    data: bytes
+
+    HEADER = 5
+
+    def pack(self) -> bytes:
+        return _FRAGMENT.pack(self.type, self.offset, self.total) + self.data
+
+    @classmethod
+    def unpack(cls, payload: bytes) -> "Fragment":
+        """Raises PayloadError unless there are a header and at least one byte of data."""
+        _need(payload, cls.HEADER + 1, "fragment", exact=False)
+        t, offset, total = _FRAGMENT.unpack_from(payload)
+        return cls(t, offset, total, bytes(payload[cls.HEADER:]))
+
+
 def describe(frame: Frame, kind: Optional[str] = None) -> Dict[str, Any]:
     """Decode a frame's payload into a dict ``{"kind": ..., fields...}`` (format of frames.json).
 
@@ -319,6 +345,10 @@ def describe(frame: Frame, kind: Optional[str] = None) -> Dict[str, Any]:
     if t == SAMPLE:
         s = Sample.unpack(p)
         return {"kind": "sample", "since_ms": s.since_ms, "value": s.value.hex()}
+    if t == FRAGMENT:
+        fr = Fragment.unpack(p)
+        return {"kind": "fragment", "carries": fr.type, "offset": fr.offset, "total": fr.total,
+                "data": fr.data.hex()}
     if t == CONTROL and kind == "bind_report":
         b = BindReport.unpack(p)
         return {"kind": "bind_report", "version": b.version, "status": list(b.status)}

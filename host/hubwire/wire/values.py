@@ -7,7 +7,7 @@ A *type object* is the part of a descriptor that names a type: ``{"t": "f32"}``,
 payload bytes and decodes payloads back:
 
 - scalars: ``bool``, ``int`` (u8..u32, i8..i32) and ``float`` (f32, f64);
-- fixed arrays: tuples;
+- fixed arrays: tuples; variable-length arrays (``{"t": "u8", "vc": 8}``, :mod:`.lists`): lists;
 - structs: instances of a tuple subclass built at runtime with one attribute per field;
 - bounded strings: ``str``; void: ``None``.
 
@@ -36,14 +36,16 @@ def type_name(obj: Mapping[str, Any]) -> str:
         return "struct{" + ", ".join(f"{f['n']}: {type_name(f)}" for f in obj.get("f", ())) + "}"
     if "c" in obj:
         return f"{t}[{obj['c']}]"
+    if "vc" in obj:
+        return f"{t}[<={obj['vc']}]"
     return str(t)
 
 
 class Codec:
     """Encoder/decoder for one type; build with :func:`codec_for`.
 
-    Attributes: ``name`` (readable type name), ``kind`` (``scalar``, ``array``, ``struct``, ``str``,
-    ``void``), ``scalar`` (element type name, or None), ``size`` (payload size, None for strings:
+    Attributes: ``name`` (readable type name), ``kind`` (``scalar``, ``array``, ``list``, ``struct``,
+    ``str``, ``void``), ``scalar`` (element type name, or None), ``size`` (payload size, None for strings:
     their size varies), ``type_obj`` (the descriptor type object).
     """
 
@@ -350,6 +352,9 @@ def codec_for(type_obj: Mapping[str, Any], where: str = "value", class_name: str
     if t == "struct":
         return StructCodec(type_obj, where, class_name)
     if t in SCALARS:
+        if "vc" in type_obj:
+            from .lists import ListCodec  # it builds on Codec, defined above
+            return ListCodec(type_obj, where)
         if "c" in type_obj:
             return ArrayCodec(type_obj, where)
         return ScalarCodec(type_obj, where)
