@@ -21,6 +21,9 @@ device itself. The run is cut in three by two events:
 Streams (``left``, ``right``, ``battery``, ``range`` at 100 Hz, every sample checked) are opened on a
 clean moment of the link and closed before each of the two events.
 
+Large values run all along too (:class:`.soak_large.BlobLoad`): the sketch's 40-byte ``blob``
+written and read back in fragments, counted per boot: 0 lost, 0 duplicated, 0 corrupt.
+
 The other direction runs all along (:class:`.soak_hub.HubTraffic`): the sketch writes tokens into
 the hub's ``tally`` and calls its ``bump``, the hub sends ``tick`` events; each boot's counts are
 settled on the clean link with the rest (:func:`.soak_hub.check_hub_boots`).
@@ -41,6 +44,7 @@ from typing import Any, Callable, Dict, List, Optional
 from .. import repo_root
 from . import FaultLink, Faults, stop_process
 from .soak_hub import HubTraffic, check_hub_boots
+from .soak_large import BlobLoad, check_blob_boot
 from .soak_load import Load, check_segment, first_after, retry, value_for, wait_for
 
 __all__ = ["SOAK_FAULTS", "run_soak", "check", "value_for", "soak_emulator_binary"]
@@ -83,6 +87,7 @@ class _Run:
         self.fl = FaultLink(self.dev_link, self.hub_link, seed=seed).start()
         self.dev: Any = None
         self.load: Any = None
+        self.blobs: Any = None
         self.traffic = HubTraffic()
         self.report: Dict[str, Any] = {}
 
@@ -100,6 +105,7 @@ class _Run:
                                   "downloads": self.dev.session.stats.downloads,
                                   "chunk_requests": self.dev.session.stats.chunk_requests}
         self.load = Load(self.dev, self.log)
+        self.blobs = BlobLoad(self.dev, self.log)
         self.traffic.start(self.dev)
 
     def open_streams(self) -> None:
@@ -129,6 +135,7 @@ class _Run:
                          f"token {self.load.token}, {len(self.load.lost)} link losses")
                 next_report = time.monotonic() + 10
             self.load.step()
+            self.blobs.step()
             self.traffic.step(self.dev)
             self._revive_streams()
 
@@ -157,6 +164,7 @@ class _Run:
         self.set_faults(Faults(cut=True))
         while time.monotonic() - t < DEAD_TIMEOUTS * LOSS_TIMEOUT_S:
             load.step()
+            self.blobs.step()
             self.traffic.step(dev)
         lost = load.lost[lost0:]
         self.set_faults(self.faults)
@@ -177,6 +185,7 @@ class _Run:
         load.stop_streams()
         self.set_faults(CLEAN)
         load.close_segment(final=False)
+        self.blobs.close_boot()
         self.traffic.close_boot(dev)
         self.set_faults(self.faults)
         r0, dl0 = len(load.reconnects), dev.session.stats.downloads
@@ -226,6 +235,7 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
         run.load.stop_streams()
         run.set_faults(CLEAN)  # accounting on a clean link
         run.load.close_segment(final=True)
+        run.blobs.close_boot()
         run.traffic.close_boot(run.dev)
         return _result(run, elapsed, during, f0, frames, seed)
     finally:
@@ -259,6 +269,11 @@ def _result(run: _Run, elapsed: float, during: Dict[str, Any], f0: int, frames: 
                                             "link_restored", "rehandshakes", "not_linked", "unknown_frames",
                                             "downloads", "cache_hits")},
         "hub_rx_counters": health.hub_counters, "device_rx_counters": health.device_counters,
+        "blobs": {"boots": run.blobs.boots, **{k: sum(b[k] for b in run.blobs.boots)
+                                               for k in ("sent", "acked", "applied", "reads", "lost", "duplicated",
+                                                         "corrupt")},
+                  "reassembled": s.core.link.reassembler.completed,
+                  "fragments_dropped": s.core.link.reassembler.refused},
         "hub_channels": {"boots": run.traffic.boots, "ticks_notified": run.traffic.notified,
                          **{k: stats[k] for k in ("device_writes", "device_calls", "device_duplicates",
                                                   "hub_events_delivered", "hub_event_retries", "binds_sent")}},
@@ -294,6 +309,10 @@ def check(r: Dict[str, Any]) -> List[str]:
     if len(r["hub_channels"]["boots"]) != 2:
         bad.append(f"{len(r['hub_channels']['boots'])} boots of hub channel traffic accounted, expected 2")
     bad += check_hub_boots(r["hub_channels"]["boots"])
+    if len(r["blobs"]["boots"]) != 2:
+        bad.append(f"{len(r['blobs']['boots'])} boots of large values accounted, expected 2")
+    for i, b in enumerate(r["blobs"]["boots"]):
+        bad += check_blob_boot(i, b)
     return bad
 
 
