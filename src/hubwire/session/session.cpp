@@ -311,6 +311,7 @@ void Session::onControl(const Frame& f) {
         } else if (uses(kUsesReturns) && ch.ret != kVoid) {
           type = kMsgResponse;
           len = scalarSize(ch.ret);
+          if (uses(kUsesLists) && isListCode(ch.ret)) len = (uint8_t)(1 + ret[0] * scalarSize(elementOf(ch.ret)));
         }
       } else if (uses(kUsesWrites)) {
         t.fromWire(f.payload, wholeLength(f), ch.data);
