@@ -153,13 +153,12 @@ class Link:
         now = time.monotonic()
         self.last_rx = now
         handle = self.owner.handle
-        for frag in frames:
-            if frag.type == m.FRAGMENT:
-                whole = self.reassembler.feed(frag)
+        for f in frames:
+            if f.type == m.FRAGMENT:
+                whole = self.reassembler.feed(f)
                 if whole is None:
                     continue
-                frag = whole  # handled as if it had come in one frame
-            f = frag
+                f = whole  # handled as if it had come in one frame
             t = f.type
             try:
                 if t == m.HEARTBEAT:

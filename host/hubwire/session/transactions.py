@@ -27,8 +27,6 @@ from ..wire.messages import NakCode
 
 __all__ = ["Pending", "GateCounts", "Gate", "Transactions"]
 
-#: a wire message longer than this is several frames (fragments)
-FRAME_MAX = 263
 #: the line speed assumed for a transport that names none (a pty, a socket)
 DEFAULT_BAUD = 115200
 
@@ -204,8 +202,9 @@ class Transactions:
 
     def transmit(self, p: Pending) -> None:
         p.tries += 1
-        # the retry timeout runs from when the last byte is out: fragments take their time on the line
-        p.sent_at = time.monotonic() + self._line_time(len(p.wire)) if len(p.wire) > FRAME_MAX else time.monotonic()
+        p.sent_at = time.monotonic()
+        if p.wire.count(0) > 1:  # fragments: the retry timeout runs from when the last one is out on the line
+            p.sent_at += self._line_time(len(p.wire))
         self.core.link.send(p.wire)
 
     def _line_time(self, n: int) -> float:

@@ -29,6 +29,12 @@ def test_a_200_byte_struct_and_a_list_on_the_uno(examples: Examples) -> None:
     core = dev.session.core
     prof = dev.descriptor.by_name("profile")
     assert prof.codec.size == 200 and dev.session.device_hello.max_payload == 32
+    assert [(c.name, c.access, c.type_name, c.unit, c.min, c.max) for c in dev.descriptor.channels] == [
+        ("profile", "rw", "struct{gain: f32[20], table: i16[40], name: u8[40]}", None, None, None),
+        ("path", "rw", "i16[<=12]", "cm", -1000, 1000),
+        ("sum", "c", "(u8[<=16]) -> u16", None, None, None),
+        ("profile_writes", "r", "u16", None, None, None),
+        ("path_writes", "r", "u16", None, None, None)]
 
     first = as_json(dev.profile)  # the sketch's setup() values, read in fragments
     assert first == {"gain": [i * 0.5 for i in range(20)], "table": [i * 100 - 2000 for i in range(40)],
