@@ -33,6 +33,7 @@ List<int16_t, 4> list;
 Event<uint32_t> fourBytes;
 int32_t answer(int16_t v) { return v; }
 uint64_t wideAnswer() { return 0; }
+List<uint32_t, 2> twoWords() { return List<uint32_t, 2>(); }  // 9 bytes on the wire
 
 void setLevel(uint8_t) {}
 void changed() {}
@@ -96,6 +97,8 @@ void changed() {}
 #define CASE , expose("long", level).describe(TEXT50 TEXT50 TEXT50 TEXT50 TEXT50 "123456")  // 256
 #elif HUBWIRE_CASE == 33
 #define CASE , expose("l", list).writable().failsafe(0)  // which length would it take?
+#elif HUBWIRE_CASE == 34
+#define CASE , action("two", twoWords)
 #else
 #define CASE
 #endif

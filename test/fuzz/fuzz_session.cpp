@@ -74,6 +74,11 @@ struct Imu {
   int16_t temp;
 } vImu;
 char vText[17];
+List<int16_t, 8> vList;  // Lists and a value larger than a frame: fragments both ways
+struct Big {
+  uint8_t b[60];
+  uint16_t w[10];
+} vBig;
 Event<bool> evBool;
 Event<uint16_t> evU16;
 Event<float> evF32;
@@ -86,6 +91,11 @@ uint8_t act(uint8_t v) { ++calls; return (uint8_t)(v + 1); }
 void actVoid(uint16_t v) { calls += v & 1; }
 int32_t noArg() { return (int32_t)++calls; }
 void plain() { ++calls; }
+uint16_t listSum(const List<uint8_t, 40>& v) {
+  uint16_t t = 0;
+  for (uint8_t i = 0; i < v.size(); ++i) t = (uint16_t)(t + v[i]);
+  return t;
+}
 
 }  // namespace
 
@@ -104,6 +114,9 @@ HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   expose("arr", vArr).writable().streamable().range(0, 5000),
   expose("imu", vImu, "ax:f32,gyro:i16[3],temp:i16").streamable(),
   expose("text", vText).writable().onChange(changed),
+  expose("list", vList).writable().streamable().range(-100, 100),
+  expose("big", vBig, "b:u8[60],w:u16[10]").writable().streamable().onChange(changed),
+  action("listSum", listSum),
   control("led", setLed),
   control("checked", setChecked),
   action("act", act),
@@ -128,6 +141,8 @@ void resetState() {
   vF64 = 0;
   memset(vArr, 0, sizeof(vArr));
   memset(&vImu, 0, sizeof(vImu));
+  vList.clear();
+  memset(&vBig, 0, sizeof(vBig));
   strcpy(vText, "hello");
   changes = calls = 0;
 }

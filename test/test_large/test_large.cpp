@@ -41,6 +41,19 @@ uint32_t sum(const List<uint16_t, 100>& v) {
   for (uint8_t i = 0; i < v.size(); ++i) s += v[i];
   return s;
 }
+int pinsCalls;
+List<uint8_t, 3> pins(uint8_t bank) {  // bank 0: none; else bank, bank + 1, ... up to 3
+  ++pinsCalls;
+  List<uint8_t, 3> l{};
+  for (uint8_t i = 0; i < bank && i < 3; ++i) l.push((uint8_t)(bank + i));
+  return l;
+}
+List<int16_t, 3> recent() {
+  List<int16_t, 3> l{};
+  l.push(-300);
+  l.push(7);
+  return l;
+}
 uint8_t trues(const List<bool, 4>& v) {
   uint8_t n = 0;
   for (uint8_t i = 0; i < v.size(); ++i) n += v[i];
@@ -54,9 +67,16 @@ HUBWIRE_CHANNELS(large, "large",
   control("steps", setSteps),                                                                        // 4
   action("sum", sum),                                                                                // 5
   action("trues", trues),                                                                            // 6
-  expose("small", small).writable());                                                                // 7
+  expose("small", small).writable(),                                                                 // 7
+  action("pins", pins),                                                                              // 8
+  action("recent", recent));                                                                         // 9
 
-const uint8_t kKilo = 1, kPath = 2, kBlob = 3, kSteps = 4, kSum = 5, kTrues = 6, kSmall = 7;
+const uint8_t kKilo = 1, kPath = 2, kBlob = 3, kSteps = 4, kSum = 5, kTrues = 6, kSmall = 7, kPins = 8, kRecent = 9;
+
+Bytes operator+(Bytes a, const Bytes& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
 
 Bytes bytesOf(const void* p, size_t n) { return Bytes((const uint8_t*)p, (const uint8_t*)p + n); }
 
@@ -156,6 +176,13 @@ TEST_F(Large, DeclarationsSizeTheOneBuffer) {
   EXPECT_EQ(ch[kSum - 1]["vc"], 100);
   EXPECT_EQ(ch[kSum - 1]["rt"], "u32");
   EXPECT_EQ(ch[kSmall - 1]["c"], 4);
+  EXPECT_EQ(ch[kPins - 1]["rt"], "u8");
+  EXPECT_EQ(ch[kPins - 1]["rvc"], 3);
+  EXPECT_EQ(ch[kPins - 1]["t"], "u8");
+  EXPECT_FALSE(ch[kPins - 1].contains("vc"));
+  EXPECT_EQ(ch[kRecent - 1]["rt"], "i16");
+  EXPECT_EQ(ch[kRecent - 1]["rvc"], 3);
+  EXPECT_FALSE(ch[kKilo - 1].contains("rvc"));
 }
 
 TEST_F(Large, AKilobyteStructIsWrittenInFragmentsAndAppliedOnce) {
@@ -455,6 +482,24 @@ TEST_F(Lists, BoolElementsAreZeroOrOne) {
   f = control(kTrues, Bytes{3, 1, 2, 1});
   EXPECT_EQ(f.type, 0x15);
   EXPECT_EQ(f.payload, nak(kErrBadValue));
+}
+
+TEST_F(Lists, AnActionReturnsAListWithItsCountAndARetryIsAnsweredFromMemory) {
+  link();
+  pinsCalls = 0;
+  sendFrame(stream, 'C', 0x71, kPins, Bytes{5});
+  auto got = run();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, 'r');
+  EXPECT_EQ(got[0].payload, (Bytes{3, 5, 6, 7}));
+  sendFrame(stream, 'C', 0x71, kPins, Bytes{5});  // the hub's retry: same seq
+  got = run();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].payload, (Bytes{3, 5, 6, 7}));
+  EXPECT_EQ(pinsCalls, 1);
+  EXPECT_EQ(control(kPins, Bytes{0}).payload, Bytes{0});  // an empty list
+  EXPECT_EQ(control(kPins, Bytes{2}).payload, (Bytes{2, 2, 3}));
+  EXPECT_EQ(control(kRecent, Bytes{}).payload, (Bytes{2}) + le<int16_t>(-300) + le<int16_t>(7));
 }
 
 TEST(ListCodec, MemoryAndWireForms) {

@@ -102,6 +102,29 @@ uint8_t beep(uint8_t n) { return beepsLeft = n; }
 HUBWIRE_CHANNELS(others, "others", expose("label", label).streamable(), action("beep", beep));
 
 namespace {
+hubwire::List<int16_t, 4> shortList;         // 9 bytes: one frame
+uint8_t justFits[HUBWIRE_MAX_PAYLOAD - 2];  // a sample of it: exactly one frame
+uint8_t oneMore[HUBWIRE_MAX_PAYLOAD - 1];   // a sample of it does not fit: fragments
+uint8_t wide[HUBWIRE_MAX_PAYLOAD + 1];      // a write of it does not fit either
+}  // namespace
+
+HUBWIRE_CHANNELS(lists, "lists", expose("l", shortList).writable(), expose("fits", justFits));
+// (A program holds one table with large values, as one with hub channels: this one is not a table.)
+constexpr auto sampled = hubwire::declare::declared("sampled", hubwire::declare::expose("s", oneMore).writable());
+HUBWIRE_CHANNELS(written, "written", expose("w", wide).writable(), expose("l", shortList));
+
+namespace {
+
+// Large values: the `large` feature when a message carrying a value (a sample: 2 bytes more) may
+// not fit the device's frame; the reassembly buffer only for writes that do not fit.
+TEST(Tables, ListsAndLargeValues) {
+  EXPECT_EQ(hubwire_channels_lists::features, kUsesLists | kUsesWrites | kUsesReads);
+  EXPECT_EQ(hubwire_channels_lists::largeIn, 0);
+  EXPECT_EQ(featuresOf(sampled.list) & kUsesLarge, kUsesLarge);
+  EXPECT_EQ(largeInOf(sampled.list), 0);  // its write fits one frame
+  EXPECT_EQ(hubwire_channels_written::features & (kUsesLarge | kUsesLists), kUsesLarge | kUsesLists);
+  EXPECT_EQ(hubwire_channels_written::largeIn, sizeof(wide));
+}
 
 // What each declaration adds to the features HUBWIRE_CHANNELS works out (features.h).
 TEST(Tables, FeaturesOfTheDeclarations) {

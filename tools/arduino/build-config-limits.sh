@@ -15,7 +15,9 @@ BUILD_ROOT=$(realpath -m "${1:-$ROOT/build/config-limits}")
 # Thermostat declares the hub's channels (its four need HUBWIRE_MAX_HUB_CHANNELS=4, its float argument 4 bytes).
 # Largest buffers are taken one at a time: all of them at once need more than the Uno's 2 KB.
 # The smallest settings are the smallest Minimal fits: its three channels need
-# HUBWIRE_MAX_CHANNELS=3 (fewer is a compile error by design, declare.h).
+# HUBWIRE_MAX_CHANNELS=3 (fewer is a compile error by design, declare.h), its largest value 2 bytes
+# HUBWIRE_MAX_VALUE=2. LargeValues: fragments of 11 bytes (payload 16), and with payload 255 no
+# value large at all (its lists alone).
 CASES=(
   "Rover|-DHUBWIRE_MAX_STREAMS=0"
   "Rover|-DHUBWIRE_MAX_STREAMS=32 -DHUBWIRE_EVENT_QUEUE=64 -DHUBWIRE_MAX_CHANNELS=254 -DHUBWIRE_MAX_PAYLOAD=255 -DHUBWIRE_MIN_STREAM_INTERVAL_MS=1"
@@ -24,6 +26,9 @@ CASES=(
   "Minimal|-DHUBWIRE_HEARTBEAT_MS=10 -DHUBWIRE_LOST_AFTER_BEATS=2 -DHUBWIRE_ANNOUNCE_MS=10 -DHUBWIRE_EVENT_RETRY_MS=10"
   "Minimal|-DHUBWIRE_HEARTBEAT_MS=10 -DHUBWIRE_LOST_AFTER_BEATS=6553"
   "Minimal|-DHUBWIRE_HEARTBEAT_MS=16383 -DHUBWIRE_ANNOUNCE_MS=60000 -DHUBWIRE_EVENT_RETRY_MS=60000"
+  "Minimal|-DHUBWIRE_MAX_VALUE=2"
+  "LargeValues|-DHUBWIRE_MAX_VALUE=65535 -DHUBWIRE_MAX_PAYLOAD=16"
+  "LargeValues|-DHUBWIRE_MAX_PAYLOAD=255"
   "Thermostat|-DHUBWIRE_HUB_QUEUE=1 -DHUBWIRE_HUB_MAX_VALUE=4 -DHUBWIRE_MAX_HUB_CHANNELS=4 -DHUBWIRE_HUB_RETRY_MS=10 -DHUBWIRE_HUB_TRIES=1"
   "Thermostat|-DHUBWIRE_HUB_QUEUE=32 -DHUBWIRE_HUB_MAX_VALUE=32 -DHUBWIRE_MAX_HUB_CHANNELS=31 -DHUBWIRE_HUB_RETRY_MS=257 -DHUBWIRE_HUB_TRIES=255"
 )

@@ -106,6 +106,24 @@ bool callListRet(const void* call, const uint8_t* arg, uint8_t* ret) {
   memcpy(ret, &r, sizeof(R));
   return true;
 }
+// A returned List goes out in its wire form (count, then packed elements).
+template <typename L>
+void listToWire(const L& r, uint8_t* ret) {
+  ret[0] = r.count < L::capacity() ? r.count : L::capacity();
+  memcpy(ret + 1, r.items, ret[0] * sizeof(r.items[0]));
+}
+template <typename L, typename A>
+bool callRetList(const void* call, const uint8_t* arg, uint8_t* ret) {
+  A a;
+  memcpy(&a, arg, sizeof(A));
+  listToWire(functionAt<L (*)(A)>(call)(a), ret);
+  return true;
+}
+template <typename L>
+bool callNoArgList(const void* call, const uint8_t*, uint8_t* ret) {
+  listToWire(functionAt<L (*)()>(call)(), ret);
+  return true;
+}
 inline bool callPlain(const void* call, const uint8_t*, uint8_t*) {
   functionAt<void (*)()>(call)();
   return true;

@@ -67,15 +67,16 @@
                                      &hubwire_channels_##var::declared>::dispatch();               \
   HUBWIRE_LARGE_MEMBER(var, ::hubwire::Reassembly* const, state,                                     \
                        ::hubwire::declare::LargeStore<hubwire_channels_##var::largeIn>::get())      \
-  HUBWIRE_LARGE_MEMBER(var, const uint16_t, capacity, hubwire_channels_##var::largeIn)              \
-  HUBWIRE_LARGE_MEMBER(var, const ::hubwire::FragmentReceiver, receive, &::hubwire::fragmentReceived) \
-  HUBWIRE_LARGE_MEMBER(var, const ::hubwire::LargeSender, send, &::hubwire::sendLarge)             \
+  HUBWIRE_LARGE_MEMBER(var, uint16_t const, capacity, hubwire_channels_##var::largeIn)              \
+  HUBWIRE_LARGE_MEMBER(var, ::hubwire::FragmentReceiver const, receive, &::hubwire::fragmentReceived) \
+  HUBWIRE_LARGE_MEMBER(var, ::hubwire::LargeSender const, send, &::hubwire::sendLarge)             \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>( \
           hubwire_channels_##var::json, hubwire_channels_##var::infos)
 
 // The fragments' hooks (session/fragments.h): set for a sketch with a large value, else for a
-// specialisation nothing reads.
+// specialisation nothing reads. Type ends with const or *: clang would read `uint16_t ::X` as
+// a name inside uint16_t.
 #define HUBWIRE_LARGE_MEMBER(var, Type, member, value)                                             \
   template <>                                                                                      \
   Type ::HubwireLarge<hubwire_channels_##var::large,                                               \

@@ -89,7 +89,7 @@ constexpr Piece number(const char*, NotNumeric) { return empty(); }
 constexpr Piece number(const char*, StructValue) { return empty(); }
 
 // ---- one declaration ----
-const uint8_t kPiecesPerChannel = 13;
+const uint8_t kPiecesPerChannel = 14;
 
 // T: the scalar type a range or failsafe takes (NotNumeric if none). K: what was declared. Call:
 // the type of the function a control or action calls, kept as itself (a constant expression cannot
@@ -165,11 +165,11 @@ class Decl {
   // The same declaration as another kind (remote.h: remote() is expose() for the hub's side).
   template <Kind K2>
   constexpr Decl<T, K2, Call> as(uint8_t access) const {
-    return Decl<T, K2, Call>(name_, layout_, data_, code_, count_, ret_, access, call_, thunk_, memSize_);
+    return Decl<T, K2, Call>(name_, layout_, data_, code_, count_, ret_, access, call_, thunk_, memSize_, retCount_);
   }
   constexpr Decl(const char* name, const char* layout, void* data, TypeCode code, uint8_t count,
-                 TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0)
-      : memSize_(memSize), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data),
+                 TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0, uint8_t retCount = 0)
+      : memSize_(memSize), retCount_(retCount), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data),
         call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
         flags_(0), lo_(), hi_(), failsafe_() {}
 
@@ -181,13 +181,14 @@ class Decl {
          : k == 3 ? typeNamed(",\"t\":\"", elementOf(code_))
          : k == 4 ? (count_ ? integer(isListCode(code_) ? ",\"vc\":" : ",\"c\":", count_) : empty())
          : k == 5 ? (layout_ ? Piece{",\"f\":[", kFields, 0, 0, layout_, "]"} : empty())
-         : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", ret_) : empty())
+         : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", elementOf(ret_)) : empty())
+         : k == 12 ? (retCount_ ? integer(",\"rvc\":", retCount_) : empty())
          : k == 7 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
          : k == 8 ? (flags_ & kHasRange ? number(",\"min\":", lo_) : empty())
          : k == 9 ? (flags_ & kHasRange ? number(",\"max\":", hi_) : empty())
          : k == 10 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
          : k == 11 ? (description_ ? quoted(",\"d\":\"", description_) : empty())
-                   : literal("}");
+                   : literal("}");  // k == 13
   }
   constexpr size_t jsonLength(uint8_t id, uint8_t k = 0) const {
     return k == kPiecesPerChannel ? 0 : pieceLength(piece(k, id)) + jsonLength(id, (uint8_t)(k + 1));
@@ -237,7 +238,7 @@ class Decl {
   constexpr uint16_t features() const {
     return (uint16_t)((access_ & kStreamable ? kUsesStreams : 0) | (flags_ & kHasFailsafe ? kUsesFailsafes : 0) |
                       (code_ == kStr ? kUsesStrings : 0) | (code_ == kStruct ? kUsesStructs : 0) |
-                      (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid ? kUsesReturns : 0) |
+                      (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid ? kUsesReturns : 0) | (isListCode(ret_) ? kUsesLists : 0) |
                       (K == kEvent ? kUsesEvents : 0) | (flags_ & kHasRange ? kUsesRanges : 0) |
                       (access_ & kWritable && K == kVariable ? kUsesWrites : 0) | (access_ & kReadable ? kUsesReads : 0) |
                       (isListCode(code_) ? kUsesLists : 0) | (large() ? kUsesLarge : 0));
@@ -246,11 +247,12 @@ class Decl {
  private:
   constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
                  T failsafe, Call call)
-      : memSize_(d.memSize_), name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
+      : memSize_(d.memSize_), retCount_(d.retCount_), name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
         call_(call), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
         ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
 
   uint16_t memSize_;  // structs: sizeof the struct, to check the layout against
+  uint8_t retCount_;  // an action returning a List: its capacity ("rvc")
   const char* name_;
   const char* layout_;
   const char* unit_;
@@ -376,6 +378,30 @@ constexpr Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)> action(const 
   return checkValue<T, 1 + N * sizeof(T)>(),
          Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N, kVoid,
                                                                    kCallable, fn, &callListVoid< ::hubwire::List<T, N> >);
+}
+
+/// An action returning a List (list.h), whole in one answer: 1 + N elements' bytes at most
+/// HUBWIRE_MAX_RETURN.
+///   hubwire::List<uint8_t, 3> pins(uint8_t bank);   action("pins", pins)
+template <typename R, size_t N>
+constexpr bool checkListReturn() {
+  static_assert(TypeOf<R>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
+  static_assert(1 + N * sizeof(R) <= HUBWIRE_MAX_RETURN, "returned List larger than HUBWIRE_MAX_RETURN: raise it");
+  return true;
+}
+template <typename R, size_t N, typename A>
+constexpr Decl<A, kAction, ::hubwire::List<R, N> (*)(A)> action(const char* name, ::hubwire::List<R, N> (*fn)(A)) {
+  return checkValue<A, sizeof(A)>(), checkListReturn<R, N>(),
+         Decl<A, kAction, ::hubwire::List<R, N> (*)(A)>(name, nullptr, nullptr, TypeOf<A>::code, 0, listOf(TypeOf<R>::code),
+                                                        kCallable, fn, &callRetList< ::hubwire::List<R, N>, A>, 0,
+                                                        (uint8_t)N);
+}
+template <typename R, size_t N>
+constexpr Decl<NotNumeric, kAction, ::hubwire::List<R, N> (*)()> action(const char* name, ::hubwire::List<R, N> (*fn)()) {
+  return checkListReturn<R, N>(),
+         Decl<NotNumeric, kAction, ::hubwire::List<R, N> (*)()>(name, nullptr, nullptr, kVoid, 0, listOf(TypeOf<R>::code),
+                                                               kCallable, fn, &callNoArgList< ::hubwire::List<R, N> >, 0,
+                                                               (uint8_t)N);
 }
 
 /// An event the sketch emits with emit(); the hub is told exactly once.

@@ -72,7 +72,7 @@ bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelI
   uint8_t max = s.maxOut();
   if (total <= max) {  // a list that is not full may fit after all
     if (room && portWritable(s.port_) < FrameWriter::wireSize(total)) return false;
-    memcpy(out, prefix, prefixLen);
+    if (prefixLen) memcpy(out, prefix, prefixLen);  // a read has none (prefix nullptr)
     ch.type.toWire(ch.data, out + prefixLen);
     s.tx_.send(s.port_, type, seq, id, (uint8_t)total);
     return true;

@@ -299,9 +299,11 @@ void Session::onControl(const Frame& f) {
       ChannelLimits lim;
       fromFlash(&lim, ch.limits, sizeof(lim));
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
-      if (uses(kUsesLists) && isListCode(t.code)) code = listInRange(lim, t.code, f.payload), n = 0;  // every element
       for (uint8_t i = 0; i < n && code == kOk; ++i)
         if (!lim.inRange(f.payload + i * size, &lim.min, &lim.max)) code = kErrOutOfRange;
+      // A List: the loop above read its count byte as an element (size 0); the verdict on its
+      // elements is this one. After the loop, where it leaves the other sketches' code alone.
+      if (uses(kUsesLists) && isListCode(t.code)) code = listInRange(lim, t.code, f.payload);
     }
     if (code == kOk) {
       if (uses(kUsesCalls) && ch.thunk) {
@@ -311,6 +313,7 @@ void Session::onControl(const Frame& f) {
         } else if (uses(kUsesReturns) && ch.ret != kVoid) {
           type = kMsgResponse;
           len = scalarSize(ch.ret);
+          if (uses(kUsesLists) && isListCode(ch.ret)) len = (uint8_t)(1 + ret[0] * scalarSize(elementOf(ch.ret)));
         }
       } else if (uses(kUsesWrites)) {
         t.fromWire(f.payload, wholeLength(f), ch.data);
