@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from hubwire.session.fragments import MAX_TOTAL, Reassembler, accepted, encode_message, fragments
 from hubwire.wire import messages as m
@@ -65,3 +67,19 @@ def test_reassembly_rules() -> None:
     assert c.dropped == 9 and r.completed == 2
     # a single fragment holding the whole payload completes at once
     assert r.feed(Frame(m.FRAGMENT, 1, 1, m.Fragment(m.EVENT, 0, 2, b"ab").pack())) == (m.EVENT, 1, 1, b"ab")
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(min_size=0, max_size=3000), st.integers(16, 255), st.integers(0, 255), st.integers(0, 255),
+       st.sampled_from([m.CONTROL, m.RESPONSE, m.SAMPLE, m.EVENT]))
+def test_any_message_comes_back_whole(payload: bytes, limit: int, seq: int, cid: int, t: int) -> None:
+    fs = frames(t, seq, cid, payload, limit)
+    assert all(len(f.payload) <= limit for f in fs)
+    r = Reassembler(Counters())
+    got = [f if f.type != m.FRAGMENT else r.feed(f) for f in fs]
+    assert got[-1] == (t, seq, cid, payload) and all(g is None for g in got[:-1])
+    # without any one fragment, nothing is delivered
+    if len(fs) > 1:
+        for skip in range(len(fs)):
+            r2 = Reassembler(Counters())
+            assert all(r2.feed(f) is None for i, f in enumerate(fs) if i != skip)

@@ -3,7 +3,10 @@ extras/tests/Large1K): a 1 KB struct written, read and streamed whole in fragmen
 64 u32 (257 bytes when full: large too) written, read and passed to an action."""
 from __future__ import annotations
 
+import json
 import os
+import subprocess
+import sys
 from typing import Any, Dict, Iterator
 
 import pytest
@@ -21,18 +24,21 @@ def large_binary() -> str:
 
 
 @pytest.fixture
-def large(tmp_path: Any, cache_dir: str) -> Iterator[Any]:
+def large_emu(tmp_path: Any) -> Iterator[Emulator]:
     path = large_binary()
     if not os.access(path, os.X_OK):
         pytest.fail(f"{path} missing: build it with `make emulator`", pytrace=False)
     emu = Emulator(path, str(tmp_path / "large"))
     emu.start()
-    dev = hubwire.connect(transport=tapped(emu.link), cache_dir=cache_dir)
-    try:
-        yield dev
-    finally:
-        dev.close()
-        emu.stop()
+    yield emu
+    emu.stop()
+
+
+@pytest.fixture
+def large(large_emu: Emulator, cache_dir: str) -> Iterator[Any]:
+    dev = hubwire.connect(transport=tapped(large_emu.link), cache_dir=cache_dir)
+    yield dev
+    dev.close()
 
 
 def as_json(value: Any) -> Dict[str, Any]:
@@ -79,3 +85,21 @@ def test_a_list_beyond_one_frame(large: Any) -> None:
         dev.tail = full + [1]
     assert e.value.code == m.NakCode.BAD_VALUE
     assert dev.tail_writes == 3
+
+
+def test_the_command_line_sets_and_gets_a_list_and_a_large_value(large_emu: Emulator, cache_dir: str) -> None:
+    def run(*args: str) -> Any:
+        r = subprocess.run([sys.executable, "-m", "hubwire", *args], capture_output=True, text=True, timeout=30,
+                           env=dict(os.environ, HUBWIRE_CACHE_DIR=cache_dir))
+        assert r.returncode == 0, r.stderr
+        return r.stdout.strip()
+
+    link = large_emu.link
+    assert json.loads(run("set", link, "tail", "1,2,3", "--json"))["ok"] is True
+    assert run("get", link, "tail") == "[1, 2, 3]"
+    assert json.loads(run("get", link, "tail", "--json"))["value"] == [1, 2, 3]
+    assert json.loads(run("call", link, "total", "[10, 20]", "--json"))["result"] == 30
+    assert len(json.loads(run("get", link, "big", "--json"))["value"]["words"]) == 200
+    info = json.loads(run("info", link, "--json"))
+    assert [c["type"] for c in info["channels"] if c["name"] in ("big", "tail")] == [
+        "struct{words: u32[200], f: f32[56]}", "u32[<=64]"]

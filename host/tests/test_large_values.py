@@ -190,3 +190,21 @@ def test_the_cli_parses_and_formats_lists() -> None:
         assert e.value.code == code, text
     assert fmt_value([1.5, -2.0]) == "[1.5, -2]" and fmt_value([]) == "[]"
     assert jsonable([1, 2]) == [1, 2]
+
+
+def test_large_values_and_lists_through_asyncio(tmp_path: pathlib.Path) -> None:
+    import asyncio
+
+    import hubwire.aio
+
+    async def main(path: str) -> Tuple[Any, Any, Any]:
+        async with hubwire.aio.connect(path, cache_dir=tmp_path) as dev:
+            await dev.write("big", big_value(11))
+            await dev.write("path", [5, -5])
+            return await dev.read("big"), await dev.read("path"), await dev.call("pick", [4, 5])
+
+    with LargeDevice() as fake:
+        got_big, got_path, picked = asyncio.run(asyncio.wait_for(main(fake.path), 30))
+        assert (fake.applied["big"], fake.applied["path"]) == (1, 1)
+    assert as_json(got_big) == big_value(11)
+    assert (got_path, picked) == ([5, -5], [8, 10])
