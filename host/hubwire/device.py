@@ -5,6 +5,7 @@ from typing import Any, Callable, List, Optional, Tuple, cast
 
 from . import ops
 from .descriptor import Channel, Descriptor
+from .diagnose import ACCESS_WORDS
 from .errors import HubwireError, NakError, Timeout
 from .hub_face import HubMethods
 from .iterators import EventStream, Stream
@@ -59,7 +60,6 @@ def _fmt_num(x: Any) -> str:
     return str(x)
 
 
-ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
 
 
 def channel_table(desc: Descriptor, hub: bool = False) -> str:

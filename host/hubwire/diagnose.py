@@ -52,8 +52,8 @@ ERROR_TYPES: Dict[str, str] = {
 }
 
 #: access letters in words, the command that uses each, and what lacking one is called
-ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
-_COMMANDS = {"r": "get", "w": "set", "c": "call", "e": "watch", "s": "watch"}
+ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream", "m": "mission"}
+_COMMANDS = {"r": "get", "w": "set", "c": "call", "e": "watch", "s": "watch", "m": "call"}
 _LACKING = {"r": ("NotReadable", "read"), "w": ("NotWritable", "written"), "c": ("NotCallable", "called")}
 
 #: printable excerpts of what a port said are cut to this many characters
