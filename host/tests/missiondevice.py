@@ -66,6 +66,7 @@ class MissionDevice(PtyPeer):
         self.acked: List[Tuple[int, bytes]] = []  # (id, payload) of every update the hub acked, in order
         self._ack_nth: Dict[int, int] = {}
         self.controls = 0  # hub C frames received, retries included
+        self.received: List[Frame] = []  # every frame from the hub but hellos and heartbeats
 
     # ------------------------------------------------------------------------ the sketch
 
@@ -117,6 +118,8 @@ class MissionDevice(PtyPeer):
 
     def handle(self, f: Frame) -> None:
         with self.lock2:
+            if f.type not in (m.HELLO, m.HEARTBEAT):
+                self.received.append(f)
             self._handle(f)
 
     def _handle(self, f: Frame) -> None:
