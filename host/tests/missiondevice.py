@@ -47,7 +47,8 @@ class MissionDevice(PtyPeer):
     ``ack_update(seq, nth)`` False: the hub's nth ACK of that update is lost (the device retries)."""
 
     def __init__(self, descriptor: bytes = DESCRIPTOR, *, refuse: Optional[Callable[[bytes], bool]] = None,
-                 ack_update: Optional[Callable[[int, int], bool]] = None, cancel_ends: bool = True) -> None:
+                 ack_update: Optional[Callable[[int, int], bool]] = None, cancel_ends: bool = True,
+                 report_at_start: Optional[bytes] = None) -> None:
         super().__init__(32, 240)
         self.descriptor = descriptor
         self.desc = parse_descriptor(descriptor)
@@ -55,6 +56,8 @@ class MissionDevice(PtyPeer):
         self.ack_update = ack_update or (lambda seq, nth: True)
         #: the cancel function ends the run as cancelled (False: the sketch goes on and finishes it)
         self.cancel_ends = cancel_ends
+        #: a progress value the start function reports at once: its M follows the start's answer
+        self.report_at_start = report_at_start
         self.nonce = 0x2345678
         self.missions: Dict[int, Mission] = {c.id: Mission() for c in self.desc.channels if c.mission}
         self.lock2 = threading.RLock()
@@ -188,6 +191,7 @@ class MissionDevice(PtyPeer):
         ms.running = True
         ms.final = None
         ms.starts.append(bytes(p[1:]))
+        ms.progress = self.report_at_start
         return (m.RESPONSE, f.seq, f.id, bytes((ms.run,)))
 
     def tick(self) -> None:

@@ -197,6 +197,18 @@ def test_an_update_of_an_unknown_run_is_acked_and_ignored() -> None:
         assert list(job.feedback(timeout=5)) == [0.5]
 
 
+def test_an_update_right_behind_the_start_answer_reaches_the_run() -> None:
+    # the board reports at once from its start function: the M follows the start's r on the wire
+    # and may be handled before the caller has registered the run number
+    with MissionDevice(report_at_start=f32(0.0)) as dev, connect(dev) as d:
+        for i in range(5):
+            job = d.start("drive", 1.0)
+            dev.finish(DRIVE, f32(1.0))
+            assert job.result(timeout=5) == 1.0
+            assert list(job.feedback(timeout=5)) == [0.0]
+        assert d.session.stats.unknown_mission_updates == 0
+
+
 def test_starts_are_applied_exactly_once_on_a_lossy_link() -> None:
     runs = 12
     with MissionDevice() as dev:

@@ -113,19 +113,19 @@ class Missions:
         """The run the device answered a start with; takes the updates that arrived before it."""
         rec = MissionRun(channel, run, nonce)
         h = self.core.device_hello
-        with self.lock:
+        with self.lock:  # held while the early updates are applied: a later one waits behind them
             early = self.early.pop(channel.id, [])
             old = self.runs.get((channel.id, run))
             if old is not None and not old.done:
                 self._end(old, "lost", MissionLost(f"{old.describe()} was replaced by a new run of that number",
                                                    channel.name, run))
             self.runs[(channel.id, run)] = rec
-        if h is None or h.nonce != nonce:
-            self._end(rec, "lost", MissionLost(f"{rec.describe()}: the board rebooted while the mission ran",
-                                               channel.name, run))
-        for n, u in early:
-            if n == nonce and u.run == run:
-                self._apply(rec, u)
+            if h is None or h.nonce != nonce:
+                self._end(rec, "lost", MissionLost(f"{rec.describe()}: the board rebooted while the mission ran",
+                                                   channel.name, run))
+            for n, u in early:
+                if n == nonce and u.run == run:
+                    self._apply(rec, u)
         return rec
 
     def forget(self, rec: MissionRun) -> None:
@@ -153,7 +153,7 @@ class Missions:
         except m.PayloadError as e:
             log.warning("hubwire: malformed mission update on channel id %d: %s", f.id, clip(str(e), 160))
             return
-        with self.lock:
+        with self.lock:  # against register() on a caller's thread
             rec = self.runs.get((f.id, u.run))
             if rec is None or rec.nonce != nonce or rec.done:
                 if f.id in self.early:
@@ -161,7 +161,7 @@ class Missions:
                 else:
                     core.stats.unknown_mission_updates += 1
                 return
-        self._apply(rec, u)
+            self._apply(rec, u)
 
     def _apply(self, rec: MissionRun, u: MissionUpdate) -> None:
         ch = rec.channel
