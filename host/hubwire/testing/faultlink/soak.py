@@ -21,6 +21,9 @@ device itself. The run is cut in three by two events:
 Streams (``left``, ``right``, ``battery``, ``range`` at 100 Hz, every sample checked) are opened on a
 clean moment of the link and closed before each of the two events.
 
+Missions run all along too (:class:`.soak_missions.MissionTraffic`): runs started, followed,
+sometimes cancelled, one cut short by the reboot; none lost, duplicated or corrupt.
+
 The other direction runs all along (:class:`.soak_hub.HubTraffic`): the sketch writes tokens into
 the hub's ``tally`` and calls its ``bump``, the hub sends ``tick`` events; each boot's counts are
 settled on the clean link with the rest (:func:`.soak_hub.check_hub_boots`).
@@ -41,6 +44,7 @@ from typing import Any, Callable, Dict, List, Optional
 from .. import repo_root
 from . import FaultLink, Faults, stop_process
 from .soak_hub import HubTraffic, check_hub_boots
+from .soak_missions import MissionTraffic, check_missions
 from .soak_load import Load, check_segment, first_after, retry, value_for, wait_for
 
 __all__ = ["SOAK_FAULTS", "run_soak", "check", "value_for", "soak_emulator_binary"]
@@ -84,6 +88,7 @@ class _Run:
         self.dev: Any = None
         self.load: Any = None
         self.traffic = HubTraffic()
+        self.missions = MissionTraffic(log)
         self.report: Dict[str, Any] = {}
 
     def set_faults(self, f: Faults) -> None:
@@ -101,6 +106,7 @@ class _Run:
                                   "chunk_requests": self.dev.session.stats.chunk_requests}
         self.load = Load(self.dev, self.log)
         self.traffic.start(self.dev)
+        self.missions.start(self.dev)
 
     def open_streams(self) -> None:
         """Subscribe on a clean moment (subscribing is not what is tested here), again until it
@@ -130,6 +136,7 @@ class _Run:
                 next_report = time.monotonic() + 10
             self.load.step()
             self.traffic.step(self.dev)
+            self.missions.step(self.dev)
             self._revive_streams()
 
     def _revive_streams(self) -> None:
@@ -158,6 +165,7 @@ class _Run:
         while time.monotonic() - t < DEAD_TIMEOUTS * LOSS_TIMEOUT_S:
             load.step()
             self.traffic.step(dev)
+            self.missions.step(dev)
         lost = load.lost[lost0:]
         self.set_faults(self.faults)
         t_back = time.monotonic()
@@ -178,7 +186,9 @@ class _Run:
         self.set_faults(CLEAN)
         load.close_segment(final=False)
         self.traffic.close_boot(dev)
+        self.missions.close_boot(dev)
         self.set_faults(self.faults)
+        cut = self.missions.cut_by_reboot(dev)  # a run going when the board dies: MissionLost
         r0, dl0 = len(load.reconnects), dev.session.stats.downloads
         self.emu.kill()
         self.emu.wait(5)
@@ -188,7 +198,9 @@ class _Run:
         self.report["reboot"] = {"reconnected": ok, "seconds": round(time.monotonic() - t, 2),
                                  "downloads": dev.session.stats.downloads - dl0,
                                  "cache_hits": dev.session.stats.cache_hits}
+        self.missions.ended_by_reboot(cut)
         self.traffic.start(dev)
+        self.missions.start(dev)
         self.open_streams()
 
     def close(self) -> None:
@@ -227,6 +239,7 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
         run.set_faults(CLEAN)  # accounting on a clean link
         run.load.close_segment(final=True)
         run.traffic.close_boot(run.dev)
+        run.missions.close_boot(run.dev)
         return _result(run, elapsed, during, f0, frames, seed)
     finally:
         run.close()
@@ -262,6 +275,7 @@ def _result(run: _Run, elapsed: float, during: Dict[str, Any], f0: int, frames: 
         "hub_channels": {"boots": run.traffic.boots, "ticks_notified": run.traffic.notified,
                          **{k: stats[k] for k in ("device_writes", "device_calls", "device_duplicates",
                                                   "hub_events_delivered", "hub_event_retries", "binds_sent")}},
+        "missions": run.missions.report(),
     }
 
 
@@ -294,6 +308,7 @@ def check(r: Dict[str, Any]) -> List[str]:
     if len(r["hub_channels"]["boots"]) != 2:
         bad.append(f"{len(r['hub_channels']['boots'])} boots of hub channel traffic accounted, expected 2")
     bad += check_hub_boots(r["hub_channels"]["boots"])
+    bad += check_missions(r.get("missions"))
     return bad
 
 
