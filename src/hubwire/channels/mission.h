@@ -21,20 +21,47 @@ inline bool callNoArgChecked(const void* call, const uint8_t*, uint8_t*) { retur
 
 namespace declare {
 
+// The types a goal, result or progress may have: scalars (and void), told apart before TypeOf
+// (whose test of signedness does not compile for a struct), so that the message says why.
 template <typename T>
+struct IsWireScalar {
+  static const bool value = false;
+};
+#define HUBWIRE_WIRE_SCALAR(T)         \
+  template <>                          \
+  struct IsWireScalar<T> {             \
+    static const bool value = true;    \
+  };
+HUBWIRE_WIRE_SCALAR(bool)
+HUBWIRE_WIRE_SCALAR(char)
+HUBWIRE_WIRE_SCALAR(signed char)
+HUBWIRE_WIRE_SCALAR(unsigned char)
+HUBWIRE_WIRE_SCALAR(short)
+HUBWIRE_WIRE_SCALAR(unsigned short)
+HUBWIRE_WIRE_SCALAR(int)
+HUBWIRE_WIRE_SCALAR(unsigned)
+HUBWIRE_WIRE_SCALAR(long)
+HUBWIRE_WIRE_SCALAR(unsigned long)
+HUBWIRE_WIRE_SCALAR(long long)
+HUBWIRE_WIRE_SCALAR(unsigned long long)
+HUBWIRE_WIRE_SCALAR(float)
+HUBWIRE_WIRE_SCALAR(double)
+#undef HUBWIRE_WIRE_SCALAR
+
+template <typename T, bool Scalar = IsWireScalar<T>::value>
 struct MissionTypeOf {
   static constexpr TypeCode code() { return TypeOf<T>::code; }
 };
-template <>
-struct MissionTypeOf<void> {
+template <typename T>
+struct MissionTypeOf<T, false> {  // void, or refused by checkMission()
   static constexpr TypeCode code() { return kVoid; }
 };
 
 template <typename R, typename P>
 constexpr bool checkMission() {
-  static_assert(MissionSize<R>::value == 0 || MissionTypeOf<R>::code() != kVoid,
+  static_assert(MissionSize<R>::value == 0 || (IsWireScalar<R>::value && MissionTypeOf<R>::code() != kVoid),
                 "mission result: Hubwire carries bool, 8/16/32-bit integers, float and double (or void)");
-  static_assert(MissionSize<P>::value == 0 || MissionTypeOf<P>::code() != kVoid,
+  static_assert(MissionSize<P>::value == 0 || (IsWireScalar<P>::value && MissionTypeOf<P>::code() != kVoid),
                 "mission progress: Hubwire carries bool, 8/16/32-bit integers, float and double (or void)");
   static_assert(kMissionHeader + MissionSize<R>::value <= HUBWIRE_MAX_PAYLOAD,
                 "mission result larger than HUBWIRE_MAX_PAYLOAD - 2 (an update's header): raise it");
@@ -54,6 +81,7 @@ constexpr MissionCalls<Start> missionCalls(Start start, void (*cancel)()) {
 template <typename R, typename G, typename P>
 constexpr Decl<G, kMission, MissionCalls<bool (*)(G)> > mission(const char* name, Mission<R(G), P>& m,
                                                                  bool (*start)(G), void (*cancel)()) {
+  static_assert(IsWireScalar<G>::value, "mission goal: Hubwire carries bool, 8/16/32-bit integers, float and double (or none)");
   return checkValue<G, sizeof(G) + 1>(), checkMission<R, P>(),
          Decl<G, kMission, MissionCalls<bool (*)(G)> >(name, nullptr, static_cast<MissionState*>(&m), TypeOf<G>::code, 0,
                                                         MissionTypeOf<R>::code(), kMissionAccess,
@@ -63,6 +91,7 @@ constexpr Decl<G, kMission, MissionCalls<bool (*)(G)> > mission(const char* name
 template <typename R, typename G, typename P>
 constexpr Decl<G, kMission, MissionCalls<void (*)(G)> > mission(const char* name, Mission<R(G), P>& m,
                                                                  void (*start)(G), void (*cancel)()) {
+  static_assert(IsWireScalar<G>::value, "mission goal: Hubwire carries bool, 8/16/32-bit integers, float and double (or none)");
   return checkValue<G, sizeof(G) + 1>(), checkMission<R, P>(),
          Decl<G, kMission, MissionCalls<void (*)(G)> >(name, nullptr, static_cast<MissionState*>(&m), TypeOf<G>::code, 0,
                                                         MissionTypeOf<R>::code(), kMissionAccess,
