@@ -25,7 +25,8 @@ const uint16_t kUsesEvents = 64;  // event(): the queue, its retries and ACKs
 const uint16_t kUsesRanges = 128;  // range(): writes checked against it
 const uint16_t kUsesWrites = 256;  // writable() variables (and onChange())
 const uint16_t kUsesReads = 512;  // readable variables: requests answered with their value
-const uint16_t kAllFeatures = 0x3FF;
+const uint16_t kUsesMissions = 1024;  // mission(): starts, cancels and the M updates (session/missions.h)
+const uint16_t kAllFeatures = 0x7FF;
 
 extern const uint16_t sketchFeatures;
 
