@@ -23,8 +23,11 @@ def first_progress(job: Any) -> float:
 
 def test_drive_on_uno(examples: Examples) -> None:
     dev = examples.start("Missions")
-    ch = dev.channel("drive")
-    assert (ch.mission, ch.type_name, ch.unit, ch.progress_max) == (True, "(f32) -> f32, progress f32", "m", 10)
+    assert dev.descriptor.name == "missions"
+    assert [(c.name, c.access, c.type_name, c.unit, c.min, c.max) for c in dev.descriptor.channels] == [
+        ("drive", "m", "(f32) -> f32, progress f32", "m", 0.1, 10), ("speed", "rw", "f32", "m/s", 0.1, 2),
+        ("odometer", "r", "f32", "m", None, None), ("blocked", "rw", "bool", None, None, None)]
+    assert dev.channel("drive").progress_max == 10
     # start, progress in order, result
     dev.speed = 2.0
     odometer = dev.odometer
