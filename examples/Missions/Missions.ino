@@ -59,13 +59,14 @@ void loop() {
   uint32_t now = millis();
   float step = speed * (float)(now - lastStep) / 1000.0f;
   lastStep = now;
-  if (driven + step > goal) step = goal - driven;
-  driven += step;
+  bool arrived = driven + step >= goal;
+  if (arrived) step = goal - driven;
+  driven = arrived ? goal : driven + step;  // exactly the goal at the end, whatever the rounding
   odometer += step;
   if (blocked) {
     digitalWrite(LED_BUILTIN, LOW);
     hub.fail(drive, kBlocked);
-  } else if (driven >= goal) {
+  } else if (arrived) {
     digitalWrite(LED_BUILTIN, LOW);
     hub.finish(drive, driven);
   } else if (now - lastReport >= 100) {

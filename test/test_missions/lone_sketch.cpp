@@ -7,7 +7,11 @@ using namespace hubwire;
 
 Mission<uint8_t(uint8_t), uint16_t> lift;  // id 1
 Event<uint16_t> tick;                      // id 2
-bool startLift(uint8_t) { return true; }
+int liftStarts;  // lift's and crane's (test_mission_seq.cpp)
+bool startLift(uint8_t) {
+  ++liftStarts;
+  return true;
+}
 void cancelLift() {}
 HUBWIRE_CHANNELS(lone, "lone", mission("lift", lift, startLift, cancelLift), event("tick", tick));
 

@@ -18,6 +18,7 @@ extern Mission<uint8_t(uint8_t), uint16_t> lift;  // id 1
 extern Event<uint16_t> tick;                      // id 2
 const ChannelTable& loneTable();
 bool startLift(uint8_t);
+extern int liftStarts;
 void cancelLift();
 
 Mission<uint8_t(uint8_t), uint16_t> crane;  // id 1
@@ -132,6 +133,28 @@ TEST_F(SeqTest, AnEventAckedBeforeTheNextPollLeavesItsSeqBehind) {
   ASSERT_EQ(e3.size(), 1u);
   seqs.push_back(e3[0].seq);
   for (size_t i = 1; i < seqs.size(); ++i) EXPECT_EQ(seqs[i], (uint8_t)(seqs[i - 1] + 1)) << i;
+}
+
+// The hub link restores the duplicate-control memory after an answer to the device's own chunk
+// request: a start before it must stay the control a retry is matched against.
+TEST_F(SeqTest, AHubChunkBetweenAStartAndItsRetryKeepsItExactlyOnce) {
+  ASSERT_TRUE(device.begin(linked, 1));
+  crane = decltype(crane)();
+  liftStarts = 0;
+  link();
+  ASSERT_EQ(ask(kMsgControl, ++hubSeq, 0, Bytes{1, 0}).type, kMsgAck);
+  ASSERT_TRUE(device.readHubDescriptor(0, [](uint16_t, uint16_t, const uint8_t*, uint8_t) {}));
+  auto j = only(step(), kMsgChunk);
+  ASSERT_EQ(j.size(), 1u);
+  RxFrame a = start(1, Bytes{3});
+  ASSERT_EQ(a.payload, Bytes{1});
+  uint8_t seq = hubSeq;
+  sendFrame(stream, kMsgChunk, j[0].seq, 0, Bytes{0, 0, 2, 0, '{', '}'});
+  step();
+  RxFrame again = ask(kMsgControl, seq, 1, Bytes{kMissionStart, 3});  // its answer was lost
+  EXPECT_EQ(again.type, kMsgResponse);
+  EXPECT_EQ(again.payload, Bytes{1});
+  EXPECT_EQ(liftStarts, 1);
 }
 
 }  // namespace
