@@ -258,3 +258,17 @@ def test_missions_are_not_routed_through_the_service() -> None:
     assert str(e.value) == NOT_ROUTED
     with pytest.raises(HubwireError, match="not a mission"):  # the name is checked first
         d.start("beep", 1)
+
+
+def test_a_run_without_end_times_out_and_is_lost_when_the_session_closes() -> None:
+    with MissionDevice() as dev:
+        d = connect(dev)
+        job = d.start("drive", 2.0)
+        with pytest.raises(hubwire.Timeout, match="did not end within"):
+            job.result(timeout=0.2)
+        with pytest.raises(hubwire.Timeout, match="no progress"):
+            list(job.feedback(timeout=0.2))
+        d.close()
+        with pytest.raises(MissionLost, match="session was closed"):
+            job.result(timeout=5)
+        assert job.status == "lost"
