@@ -21,16 +21,13 @@ from ..wire import messages as m
 from ..wire.frame import Frame
 from ..wire.missions import MissionKind, MissionUpdate
 
-__all__ = ["Missions", "MissionRun", "FEEDBACK_LIMIT", "STATUSES"]
+__all__ = ["Missions", "MissionRun", "FEEDBACK_LIMIT", "start_run_number"]
 
 log = logging.getLogger("hubwire")
 
 #: progress values a run keeps for its readers; beyond it the oldest are dropped (a reader that
 #: falls this far behind skips them)
 FEEDBACK_LIMIT = 4096
-STATUSES = ("running", "link lost", "succeeded", "failed", "cancelled", "lost")
-_FINAL_STATUS = {MissionKind.SUCCEEDED: "succeeded", MissionKind.FAILED: "failed",
-                 MissionKind.CANCELLED: "cancelled"}
 
 
 class MissionRun:
@@ -86,7 +83,8 @@ class MissionRun:
 
 class Missions:
     """The missions of one session. ``core`` provides ``link``, ``stats``, ``dispatch`` and
-    ``device_hello``. Runs are keyed by (channel id, run) and belong to one device nonce."""
+    ``device_hello``. Runs are keyed by (channel id, run) and belong to one device nonce; an ended
+    run stays until a run of the same number replaces it (at most 255 per channel)."""
 
     def __init__(self, core: Any) -> None:
         self.core = core
@@ -127,12 +125,6 @@ class Missions:
                 if n == nonce and u.run == run:
                     self._apply(rec, u)
         return rec
-
-    def forget(self, rec: MissionRun) -> None:
-        """The application no longer holds this run (it ended): drop it from the table."""
-        with self.lock:
-            if self.runs.get((rec.channel.id, rec.run)) is rec:
-                del self.runs[(rec.channel.id, rec.run)]
 
     # --------------------------------------------------------------------------- updates
 
