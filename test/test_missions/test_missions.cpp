@@ -350,6 +350,15 @@ TEST_F(MissionTest, TwoMissionsTakeTurnsOneUpdateInFlight) {
   EXPECT_EQ(a[0].id == kDrive ? a[0].payload : b[0].payload, update(d, kMissionProgress, 0.5f));
 }
 
+TEST_F(MissionTest, ProgressReportedInsideStartFollowsTheAnswer) {
+  reportInStart = true;
+  RxFrame a = start(kDrive, le(1.0f));
+  ASSERT_EQ(a.payload, Bytes{1});
+  auto m = only(others, kMsgMission);  // the same update() as the answer, after it
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(m[0].payload, update(1, kMissionProgress, 0.25f));
+}
+
 TEST_F(MissionTest, NothingIsSentBeforeTheHubStartsARun) {
   EXPECT_FALSE(device.progress(drive, 0.5f));
   EXPECT_FALSE(device.finish(drive, 1.0f));
