@@ -27,6 +27,7 @@ from . import ops
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, NakError, Timeout
 from .hub_face import HubMethods
+from .job import AsyncJob, start_async_job
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
 from .session.events import EventSink
 from .session.hub_channels import HubSide
@@ -35,7 +36,7 @@ from .text import clip
 from .transport import Transport
 from .wire import messages as m
 
-__all__ = ["connect", "AsyncDevice", "AsyncStream", "AsyncEventStream", "EventIterator"]
+__all__ = ["connect", "AsyncDevice", "AsyncStream", "AsyncEventStream", "EventIterator", "AsyncJob"]
 
 
 def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float = 5.0,
@@ -173,6 +174,11 @@ class AsyncDevice(HubMethods):
         """Call a callable channel with ``arg`` (None for no argument); return its result."""
         ch, payload = ops.call_payload(self._core.descriptor, name, arg)
         return ops.call_result(ch, await self._core.tx.transact(m.CONTROL, ch.id, payload, timeout=timeout, what=name))
+
+    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> AsyncJob:
+        """Start mission ``name`` with ``goal``; the :class:`hubwire.job.AsyncJob` once the board
+        answered with the run number (as :meth:`hubwire.Device.start`)."""
+        return await start_async_job(self._core, name, goal, timeout)
 
     def stream(self, name: str, hz: Optional[float] = None, *, interval_ms: Optional[int] = None,
                meta: bool = False, timeout: Optional[float] = None, maxlen: int = 1024) -> "AsyncStream":

@@ -8,7 +8,9 @@ import sys
 from typing import Any, Optional, Sequence
 
 from . import __version__, diagnose
-from .cli_support import (CliError, channel, channel_json, fmt_value, jsonable, open_device, print_json)
+from .cli_support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
+                          print_json)
+from .cli_mission import run_mission
 from .cli_watch import cmd_watch, watch_duration
 from .device import channel_table, KNOWN_USB_VIDS
 from .errors import HubwireError, NakError
@@ -87,12 +89,10 @@ def cmd_set(args: argparse.Namespace) -> int:
 
 def cmd_call(args: argparse.Namespace) -> int:
     with open_device(args) as dev:
+        if args.action in dev and dev.channel(args.action).mission:
+            return run_mission(dev, args)
         ch = channel(dev, args.action, "c")
-        if ch.codec.kind == "void" and args.arg is not None:
-            raise CliError("InvalidValue", f"{args.action} takes no argument")
-        if ch.codec.kind != "void" and args.arg is None:
-            raise CliError("InvalidValue", f"{args.action} needs an argument ({ch.codec.name})")
-        arg = None if args.arg is None else ch.codec.parse_text(args.arg)
+        arg = goal_or_argument(ch, args.arg)
         result = dev.call(args.action, arg)
         if args.json:
             print_json({"action": args.action, "result": jsonable(result)})
@@ -150,11 +150,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("channel", help="name of a writable channel (`hubwire info` lists them)")
     s.add_argument("value", help=_VALUE_HELP)
     s.set_defaults(fn=cmd_set)
-    s = sub.add_parser("call", parents=[common], help="call an action")
+    s = sub.add_parser("call", parents=[common], help="call an action, or run a mission",
+                       description="Call an action and print its result; or start a mission, show its "
+                                   "progress (a bar when it declares its progress at completion) and print "
+                                   "its result. Ctrl-C cancels a mission on the board.")
     s.add_argument("url", help=url_help)
-    s.add_argument("action", help="name of an action (access 'call' in `hubwire info`)")
-    s.add_argument("arg", nargs="?", help="the action's argument, written like a `set` value; "
-                                          "none for actions that take none")
+    s.add_argument("action", help="name of an action or a mission (access 'call' or 'mission' in `hubwire info`)")
+    s.add_argument("arg", nargs="?", help="the action's argument or the mission's goal, written like a `set` "
+                                          "value; none for those that take none")
     s.set_defaults(fn=cmd_call)
     s = sub.add_parser("watch", parents=[common], help="live view of channels, events and link health")
     s.add_argument("url", help=url_help)

@@ -13,7 +13,7 @@ from .device import Device, connect
 from .errors import HubwireError, Timeout
 
 __all__ = ["CliError", "jsonable", "fmt_value", "print_json", "progress_printer", "open_device", "channel",
-           "channel_json"]
+           "channel_json", "goal_or_argument"]
 
 
 def jsonable(v: Any) -> Any:
@@ -84,6 +84,17 @@ def open_device(args: argparse.Namespace) -> Device:
         raise
 
 
+def goal_or_argument(ch: Any, text: Any) -> Any:
+    """The parsed argument of a call or goal of a mission (None for none); CliError when it is
+    missing or there should be none."""
+    what = "goal" if ch.mission else "argument"
+    if ch.codec.kind == "void" and text is not None:
+        raise CliError("InvalidValue", f"{ch.name} takes no {what}")
+    if ch.codec.kind != "void" and text is None:
+        raise CliError("InvalidValue", f"{ch.name} needs {'a' if ch.mission else 'an'} {what} ({ch.codec.name})")
+    return None if text is None else ch.codec.parse_text(text)
+
+
 def channel(dev: Device, name: str, need: str) -> Any:
     """The channel ``name`` if its access has the letter ``need``; a CliError in words otherwise."""
     try:
@@ -99,7 +110,7 @@ def channel(dev: Device, name: str, need: str) -> Any:
 def channel_json(c: Any) -> Dict[str, Any]:
     d: Dict[str, Any] = {"id": c.id, "name": c.name, "access": c.access, "type": c.type_name}
     for k, v in (("unit", c.unit), ("min", c.min), ("max", c.max), ("failsafe", jsonable(c.failsafe)),
-                 ("description", c.description)):
+                 ("progress_max", c.progress_max), ("description", c.description)):
         if v is not None:
             d[k] = v
     return d

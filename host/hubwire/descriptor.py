@@ -23,9 +23,9 @@ MAX_DEPTH = 5
 
 NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 NAME_MAX = 32
-ACCESS_LETTERS = "rwces"
+ACCESS_LETTERS = "rwcesm"
 TOP_KEYS = {"p", "n", "fw", "ch", "hub"}
-CHANNEL_KEYS = {"id", "n", "a", "t", "c", "vc", "f", "rt", "rc", "rvc", "u", "min", "max", "fs", "d"}
+CHANNEL_KEYS = {"id", "n", "a", "t", "c", "vc", "f", "rt", "rc", "rvc", "pt", "pc", "pmax", "u", "min", "max", "fs", "d"}
 #: largest value (payload) a descriptor may declare: a fragment's u16 total (PROTOCOL.md 12)
 MAX_VALUE = 0xFFFF
 #: largest capacity of a variable-length array: its count is one byte
@@ -38,7 +38,9 @@ class Channel:
     """One channel of a device, as its descriptor declares it.
 
     ``codec`` encodes/decodes the channel's value (the argument, for a callable); ``returns`` is the
-    codec of a callable's return value (``None`` for other channels).
+    codec of a callable's return value (``None`` for other channels). A mission (access ``m``) has
+    its goal in ``codec``, its result in ``returns``, its progress in ``progress`` and the progress
+    value at completion, when declared, in ``progress_max``.
     """
 
     id: int
@@ -52,6 +54,8 @@ class Channel:
     failsafe: Any = None
     description: Optional[str] = None
     returns: Optional[Codec] = None
+    progress: Optional[Codec] = None
+    progress_max: Optional[float] = None
 
     @property
     def readable(self) -> bool:
@@ -74,11 +78,18 @@ class Channel:
         return "s" in self.access
 
     @property
+    def mission(self) -> bool:
+        return "m" in self.access
+
+    @property
     def type_name(self) -> str:
         """Readable type, e.g. ``f32``, ``i16[3]``, ``str[16]``; for callables ``(arg) -> ret``."""
-        if self.callable:
+        if self.callable or self.mission:
             arg = "" if self.codec.kind == "void" else self.codec.name
             ret = self.returns.name if self.returns is not None else "void"
+            if self.mission:
+                prog = self.progress.name if self.progress is not None else "void"
+                return f"({arg}) -> {ret}, progress {prog}"
             return f"({arg}) -> {ret}"
         return self.codec.name
 

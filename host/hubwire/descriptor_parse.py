@@ -173,7 +173,7 @@ def _access(where: str, ch: Mapping[str, Any]) -> str:
         raise _fail(where, f"access 'a' must be a non-empty string of {ACCESS_LETTERS}, got {clip_json(a)}")
     bad = [x for x in a if x not in ACCESS_LETTERS]
     if bad:
-        raise _fail(where, f"unknown access letter(s) {clip(''.join(bad))} in {clip(a)} (r readable, w writable, c callable, e event, s streamable)")
+        raise _fail(where, f"unknown access letter(s) {clip(''.join(bad))} in {clip(a)} (r readable, w writable, c callable, e event, s streamable, m mission)")
     if len(set(a)) != len(a):
         raise _fail(where, f"repeated access letter in {clip(a)}")
     if "s" in a and "r" not in a:
@@ -182,12 +182,14 @@ def _access(where: str, ch: Mapping[str, Any]) -> str:
         raise _fail(where, f"access {clip(a)}: writable 'w' and callable 'c' exclude each other")
     if "e" in a and a != "e":
         raise _fail(where, f"access {clip(a)}: event 'e' stands alone")
+    if "m" in a and a != "m":
+        raise _fail(where, f"access {clip(a)}: mission 'm' stands alone")
     return a
 
 
 def _channel_type(where: str, ch: Mapping[str, Any], name: str, a: str) -> Tuple[Dict[str, Any], Codec, Optional[Codec]]:
     """The type object, codec and (callables) return codec of a channel."""
-    callable_ = "c" in a
+    callable_ = "c" in a or "m" in a  # a mission's goal and result are typed as a call's
     if "t" not in ch:
         raise _fail(where, "channel has no type 't'")
     t = ch["t"]
@@ -201,10 +203,10 @@ def _channel_type(where: str, ch: Mapping[str, Any], name: str, a: str) -> Tuple
     returns = None
     if "rt" in ch or "rc" in ch or "rvc" in ch:
         if not callable_:
-            raise _fail(where, "return type 'rt'/'rc'/'rvc' is only for callable channels")
+            raise _fail(where, "return type 'rt'/'rc'/'rvc' is only for callable channels and missions")
         if "rt" not in ch:
             raise _fail(where, "'rc'/'rvc' given without a return type 'rt'")
-        rto = _type_obj(where + " return", ch["rt"], ch, "rc", ("str", "void"), "rvc")
+        rto = _type_obj(where + " return", ch["rt"], ch, "rc", ("void",) if "m" in a else ("str", "void"), "rvc")
         returns = codec_for(rto, where=f"{name} return value", class_name=f"{name}_result")
     elif callable_:
         returns = codec_for({"t": "void"})
@@ -212,6 +214,25 @@ def _channel_type(where: str, ch: Mapping[str, Any], name: str, a: str) -> Tuple
     if "s" in a and codec.max_size + 2 > MAX_VALUE:
         raise _fail(where, f"a streamable value of {codec.max_size} bytes does not fit a sample frame")
     return type_obj, codec, returns
+
+
+def _progress(where: str, ch: Mapping[str, Any], name: str, a: str) -> Tuple[Optional[Codec], Optional[float]]:
+    """A mission's progress codec (void when ``pt`` is absent) and ``pmax``; None for other channels."""
+    keys = [k for k in ("pt", "pc", "pmax") if k in ch]
+    if "m" not in a:
+        if keys:
+            raise _fail(where, f"{clip_list(keys)}: progress keys are only for missions (access 'm')")
+        return None, None
+    if "pc" in ch and "pt" not in ch:
+        raise _fail(where, "'pc' given without a progress type 'pt'")
+    pto = _type_obj(where + " progress", ch["pt"], ch, "pc", ("void",)) if "pt" in ch else {"t": "void"}
+    pmax = ch.get("pmax")
+    if pmax is not None and not _is_num(pmax):
+        raise _fail(where, f"'pmax' must be a number, got {clip_json(pmax)}")
+    codec = codec_for(pto, where=f"{name} progress", class_name=f"{name}_progress")
+    if codec.max_size + 2 > PROTOCOL_MAX_PAYLOAD:
+        raise _fail(where, f"a progress value of {codec.max_size} bytes does not fit a mission update")
+    return codec, pmax
 
 
 def _text(where: str, ch: Mapping[str, Any], key: str, what: str) -> Optional[str]:
@@ -244,7 +265,7 @@ def _range(where: str, ch: Mapping[str, Any], a: str, codec: Codec) -> Tuple[Any
 def _failsafe(where: str, ch: Mapping[str, Any], a: str, codec: Codec, type_obj: Mapping[str, Any]) -> Any:
     if "fs" not in ch:
         return None
-    if "e" in a or "c" in a:
+    if "e" in a or "c" in a or "m" in a:
         raise _fail(where, "a failsafe value 'fs' is only for readable/writable channels")
     raw_fs = ch["fs"]
     try:
@@ -271,15 +292,20 @@ def _parse_channel(i: int, ch: Any, key: str = "ch") -> Channel:
     if not _is_int(cid) or not 1 <= cid <= 255:
         raise _fail(where, f"'id' must be an integer 1..255, got {clip_json(cid)}")
     a = _access(where, ch)
-    if key == "hub" and "s" in a:
-        raise _fail(where, f"access {clip(a)}: a hub channel is not streamable")
+    if key == "hub" and ("s" in a or "m" in a):
+        raise _fail(where, f"access {clip(a)}: a hub channel is not {'streamable' if 's' in a else 'a mission'}")
     type_obj, codec, returns = _channel_type(where, ch, name, a)
     unit = _text(where, ch, "u", "unit")
     desc = _text(where, ch, "d", "description")
     lo, hi = _range(where, ch, a, codec)
     fs = _failsafe(where, ch, a, codec, type_obj)
-    return Channel(id=cid, name=name, access=a, codec=codec, type=type_obj, unit=unit,
-                   min=lo, max=hi, failsafe=fs, description=desc, returns=returns)
+    progress, pmax = _progress(where, ch, name, a)
+    if "m" in a and returns is not None and returns.max_size + 2 > PROTOCOL_MAX_PAYLOAD:
+        raise _fail(where, f"a result of {returns.max_size} bytes does not fit a mission update")
+    if "m" in a and codec.max_size + 1 > PROTOCOL_MAX_PAYLOAD:
+        raise _fail(where, f"a goal of {codec.max_size} bytes does not fit a start (op byte + goal)")
+    return Channel(id=cid, name=name, access=a, codec=codec, type=type_obj, unit=unit, min=lo, max=hi, failsafe=fs,
+                   description=desc, returns=returns, progress=progress, progress_max=pmax)
 
 
 def parse_descriptor(data: Union[bytes, bytearray, str]) -> Descriptor:

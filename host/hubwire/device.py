@@ -5,9 +5,11 @@ from typing import Any, Callable, List, Optional, Tuple, cast
 
 from . import ops
 from .descriptor import Channel, Descriptor
+from .diagnose import ACCESS_WORDS
 from .errors import HubwireError, NakError, Timeout
 from .hub_face import HubMethods
 from .iterators import EventStream, Stream
+from .job import Job
 from .ports import KNOWN_USB_VIDS, find_port
 from .session import LinkHealth, Session
 from .session.hub_channels import HubSide
@@ -59,7 +61,6 @@ def _fmt_num(x: Any) -> str:
     return str(x)
 
 
-ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
 
 
 def channel_table(desc: Descriptor, hub: bool = False) -> str:
@@ -86,6 +87,8 @@ class Device(HubMethods):
     - ``dev.beep(200)`` / ``dev["beep"](200)`` calls a callable channel and returns its result;
     - ``dev.read(name)``, ``dev.write(name, value)``, ``dev.call(name, arg)`` do the same by name;
     - ``dev.on("bumper", callback)``, ``dev.events()``, ``dev.stream("imu", hz=50)``;
+    - ``job = dev.start("drive", 2.0)`` starts a mission (:class:`hubwire.Job`: ``feedback()``,
+      ``result()``, ``cancel()``);
     - ``print(dev.table())`` shows the table of channels;
     - the other direction: ``dev.provide``, ``dev.accept``, ``dev.action``, ``dev.event`` declare
       hub channels the device may use, ``dev.notify(name, value)`` sends it a hub event.
@@ -190,6 +193,14 @@ class Device(HubMethods):
         ch, payload = ops.call_payload(self._session.descriptor, name, arg)
         return ops.call_result(ch, self._session.control(ch.id, payload, timeout=timeout, what=name))
 
+    def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> "Job":
+        """Start mission ``name`` with ``goal`` (None for a mission without goal) and return its
+        :class:`hubwire.Job` once the board answered with the run number (exactly once, as a write).
+        :class:`NakError` ``BUSY`` while a run of that mission runs, ``REJECTED`` when the sketch refused."""
+        from .job import start_job
+
+        return start_job(self._session, name, goal, timeout)
+
     # --------------------------------------------------------------------------- events
 
     def on(self, name: str, callback: Callable[..., Any]) -> Callable[[], None]:
@@ -235,6 +246,8 @@ class Device(HubMethods):
 
     def __getitem__(self, name: str) -> Any:
         ch = self.channel(name)
+        if ch.mission:
+            raise ops.not_a_mission(ch)
         return self._bound_call(ch) if ch.callable else self.read(name)
 
     def __setitem__(self, name: str, value: Any) -> None:
@@ -251,6 +264,8 @@ class Device(HubMethods):
                                  + (f"; channels: {clip_list(c.name for c in d.channels)}" if d else ""))
         if ch.callable:
             return self._bound_call(ch)
+        if ch.mission:
+            raise AttributeError(str(ops.not_a_mission(ch)))
         if ch.readable:
             return self.read(name)
         if ch.is_event:

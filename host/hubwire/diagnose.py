@@ -18,8 +18,8 @@ except ImportError:  # pragma: no cover - Windows has no permission groups to ex
     grp = pwd = None  # type: ignore[assignment]
 from typing import Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
-from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, NakError, NoDeviceFound,
-                     ProtocolVersionError, Timeout)
+from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, MissionCancelled, MissionFailed,
+                     MissionLost, NakError, NoDeviceFound, ProtocolVersionError, Timeout)
 
 __all__ = [
     "ACCESS_WORDS", "ERROR_TYPES", "Holder", "PortOpenError", "access_error", "access_words", "busy_message",
@@ -47,13 +47,16 @@ ERROR_TYPES: Dict[str, str] = {
     "ProtocolVersionError": "the device speaks another Hubwire protocol version",
     "UnknownBoard": "hubwire serve has no board of that name (the message lists the boards it has)",
     "ServiceNotRunning": "a board was named but hubwire serve is not running (the message says how to start it)",
+    "MissionFailed": "the mission ended with a failure (its code is in the \"code\" field)",
+    "MissionCancelled": "the mission was cancelled on the board",
+    "MissionLost": "the board rebooted while the mission ran",
     "Usage": "the command line is not valid (exit status 2)",
     "Error": "any other error",
 }
 
 #: access letters in words, the command that uses each, and what lacking one is called
-ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
-_COMMANDS = {"r": "get", "w": "set", "c": "call", "e": "watch", "s": "watch"}
+ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream", "m": "mission"}
+_COMMANDS = {"r": "get", "w": "set", "c": "call", "e": "watch", "s": "watch", "m": "call"}
 _LACKING = {"r": ("NotReadable", "read"), "w": ("NotWritable", "written"), "c": ("NotCallable", "called")}
 
 #: printable excerpts of what a port said are cut to this many characters
@@ -92,7 +95,8 @@ def error_type(exc: BaseException) -> str:
         return str(kind)
     if isinstance(exc, NakError):
         return "Nak"
-    for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError):
+    for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
+                MissionFailed, MissionCancelled, MissionLost):
         if isinstance(exc, cls):
             return cls.__name__
     return "Error"

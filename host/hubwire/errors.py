@@ -76,3 +76,32 @@ class NakError(HubwireError):
         self.channel = channel
         where = f" for channel {channel!r}" if channel else ""
         super().__init__(f"device answered NAK {self.error} ({code}){where}{': ' + what if what else ''}")
+
+
+class MissionError(HubwireError):
+    """A mission did not succeed: the base of :class:`MissionFailed`, :class:`MissionCancelled` and
+    :class:`MissionLost`. ``mission`` is the channel's name, ``run`` the device's run number."""
+
+    def __init__(self, message: str, mission: str = "", run: int = 0) -> None:
+        super().__init__(message)
+        self.mission = mission
+        self.run = run
+
+
+class MissionFailed(MissionError):
+    """The sketch ended the run with a failure; ``code`` is the error code it chose (1..255)."""
+
+    def __init__(self, mission: str, run: int, code: int) -> None:
+        super().__init__(f"mission {mission!r} run {run} failed with code {code}", mission, run)
+        self.code = code
+
+
+class MissionCancelled(MissionError):
+    """The run ended as cancelled (by :meth:`Job.cancel`, or by the sketch)."""
+
+    def __init__(self, mission: str, run: int) -> None:
+        super().__init__(f"mission {mission!r} run {run} was cancelled", mission, run)
+
+
+class MissionLost(MissionError):
+    """The run's outcome can never arrive: the board rebooted while it ran (or the session closed)."""

@@ -11,7 +11,8 @@ from .wire import messages as m
 from .wire.frame import Frame
 
 __all__ = ["channel", "readable", "write_payload", "call_payload", "call_result", "stream_channel",
-           "interval_for", "event_key", "cached_board_id", "remember_board_id", "UNASKED"]
+           "interval_for", "event_key", "cached_board_id", "remember_board_id", "UNASKED", "mission_start",
+           "not_a_mission"]
 
 
 def channel(desc: Optional[Descriptor], name: str) -> Channel:
@@ -40,18 +41,43 @@ def write_payload(desc: Optional[Descriptor], name: str, value: Any) -> "tuple[C
     return ch, ch.codec.encode(ch.check(value))
 
 
-def call_payload(desc: Optional[Descriptor], name: str, arg: Any) -> "tuple[Channel, bytes]":
-    """Channel and payload of a call with ``arg`` (None for no argument)."""
-    ch = channel(desc, name)
-    if not ch.callable:
-        raise HubwireError(f"channel {name!r} is not callable (access {ch.access!r})")
+def not_a_mission(ch: Channel) -> HubwireError:
+    """The error for using a mission as a call, a read or a write."""
+    return HubwireError(f"{ch.name!r} is a mission, not an action: start it with dev.start({ch.name!r}"
+                        f"{'' if ch.codec.kind == 'void' else ', goal'}) and wait with job.result()")
+
+
+def _argument(ch: Channel, name: str, arg: Any) -> bytes:
     if ch.codec.kind == "void":
         if arg is not None:
             raise HubwireError(f"{name}() takes no argument")
-        return ch, b""
+        return b""
     if arg is None:
         raise HubwireError(f"{name}() needs an argument of type {ch.codec.name}")
-    return ch, ch.codec.encode(ch.check(arg))
+    return ch.codec.encode(ch.check(arg))
+
+
+def mission_start(desc: Optional[Descriptor], name: str, goal: Any) -> "tuple[Channel, bytes]":
+    """Channel and ``C`` payload that start mission ``name`` with ``goal`` (None for no goal)."""
+    from .diagnose import access_words
+    from .wire.missions import start_payload
+
+    ch = channel(desc, name)
+    if not ch.mission:
+        hint = f"; call an action with dev.call({name!r}, ...)" if ch.callable else ""
+        raise HubwireError(f"channel {name!r} is not a mission (its access is {access_words(ch.access)}): "
+                           f"dev.start starts missions only{hint}")
+    return ch, start_payload(_argument(ch, name, goal))
+
+
+def call_payload(desc: Optional[Descriptor], name: str, arg: Any) -> "tuple[Channel, bytes]":
+    """Channel and payload of a call with ``arg`` (None for no argument)."""
+    ch = channel(desc, name)
+    if ch.mission:
+        raise not_a_mission(ch)
+    if not ch.callable:
+        raise HubwireError(f"channel {name!r} is not callable (access {ch.access!r})")
+    return ch, _argument(ch, name, arg)
 
 
 def call_result(ch: Channel, answer: Frame) -> Any:

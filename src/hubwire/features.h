@@ -27,7 +27,8 @@ const uint16_t kUsesWrites = 256;  // writable() variables (and onChange())
 const uint16_t kUsesReads = 512;  // readable variables: requests answered with their value
 const uint16_t kUsesLists = 1024;  // a hubwire::List<T, N> value: the variable-length codec
 const uint16_t kUsesLarge = 2048;  // a value whose message may not fit one frame: fragments
-const uint16_t kAllFeatures = 0xFFF;
+const uint16_t kUsesMissions = 4096;  // mission(): starts, cancels and the M updates (session/missions.h)
+const uint16_t kAllFeatures = 0x1FFF;
 
 extern const uint16_t sketchFeatures;
 

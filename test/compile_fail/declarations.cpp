@@ -37,9 +37,18 @@ List<uint32_t, 2> twoWords() { return List<uint32_t, 2>(); }  // 9 bytes on the 
 
 void setLevel(uint8_t) {}
 void changed() {}
+Mission<float(float), float> drive;
+bool startDrive(float) { return true; }
+void stopDrive() {}
+Mission<void(), void> home;
+void startHome() {}
+Mission<Wide(float), float> wideResult;
+Mission<float(float), Wide> wideProgress;
+Mission<float(Wide), float> wideGoal;
+bool startWide(Wide) { return true; }
 
 #if HUBWIRE_CASE == 0 || HUBWIRE_CASE == 7 || HUBWIRE_CASE == 8 || HUBWIRE_CASE == 20
-#define CASE  // the control alone (7, 8, 20: with a setting too small for it; 20: 6 channels for its 7)
+#define CASE  // the control alone (7, 8, 20: with a setting too small for it; 20: 6 channels for its 9)
 #elif HUBWIRE_CASE == 1
 #define CASE , expose("big", big)
 #elif HUBWIRE_CASE == 2
@@ -96,8 +105,24 @@ void changed() {}
 #define TEXT50 "a text of fifty characters, ten words and no more."
 #define CASE , expose("long", level).describe(TEXT50 TEXT50 TEXT50 TEXT50 TEXT50 "123456")  // 256
 #elif HUBWIRE_CASE == 33
-#define CASE , expose("l", list).writable().failsafe(0)  // which length would it take?
+#define CASE , mission("m", wideResult, startDrive, stopDrive)  // a result is a scalar: one frame
 #elif HUBWIRE_CASE == 34
+#define CASE , mission("m", wideProgress, startDrive, stopDrive)  // so is progress
+#elif HUBWIRE_CASE == 35
+#define CASE , mission("m", wideGoal, startWide, stopDrive)  // and a goal
+#elif HUBWIRE_CASE == 36
+#define CASE , mission("m", drive, startDrive, stopDrive).failsafe(0.0f)  // the sketch stops it
+#elif HUBWIRE_CASE == 37
+#define CASE , mission("m", drive, startDrive, stopDrive).writable()  // started, not written
+#elif HUBWIRE_CASE == 38
+#define CASE , mission("m", drive, startDrive, stopDrive).streamable()  // progress is its stream
+#elif HUBWIRE_CASE == 39
+#define CASE , expose("x", real, "v:f32").progressMax(1.0f)  // no progress
+#elif HUBWIRE_CASE == 40
+#define CASE , mission("m", home, startHome, stopDrive).range(0, 1)  // no goal, no range
+#elif HUBWIRE_CASE == 41
+#define CASE , expose("l", list).writable().failsafe(0)  // which length would it take?
+#elif HUBWIRE_CASE == 42
 #define CASE , action("two", twoWords)
 #else
 #define CASE
@@ -110,7 +135,9 @@ HUBWIRE_CHANNELS(channels, device("control").firmware("1.0"),
   event("e", fourBytes),
   action("answer", answer).range(-5, 5),
   expose("pose", pose, "x:f32,ok:u8,t:i16[2]").writable().streamable(),
-  expose("a_name_of_thirty_two_characters_", real, "v:f32")  // the longest name
+  expose("a_name_of_thirty_two_characters_", real, "v:f32"),  // the longest name
+  mission("drive", drive, startDrive, stopDrive).range(0.0f, 10.0f).unit("m").progressMax(2.0f),
+  mission("home", home, startHome, stopDrive)
   CASE);
 
 // Channel ids are one byte: at HUBWIRE_MAX_CHANNELS=254, 255 channels must fail, and 256 (which

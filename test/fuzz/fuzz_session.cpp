@@ -96,6 +96,11 @@ uint16_t listSum(const List<uint8_t, 40>& v) {
   for (uint8_t i = 0; i < v.size(); ++i) t = (uint16_t)(t + v[i]);
   return t;
 }
+Mission<float(float), float> drive;
+Mission<void(), void> home;
+bool startDrive(float g) { return g != 3.0f; }
+void startHome() {}
+void stopIt() { ++calls; }
 
 }  // namespace
 
@@ -125,7 +130,9 @@ HUBWIRE_CHANNELS(channels, device("fuzz").firmware("0.1"),
   action("plain", plain),
   event("bump", evBool),
   event("count", evU16),
-  event("level", evF32));
+  event("level", evF32),
+  mission("drive", drive, startDrive, stopIt).range(0.0f, 10.0f).progressMax(10.0f),
+  mission("home", home, startHome, stopIt));
 
 namespace {
 
@@ -145,6 +152,9 @@ void resetState() {
   memset(&vBig, 0, sizeof(vBig));
   strcpy(vText, "hello");
   changes = calls = 0;
+  drive = decltype(drive)();
+  home = decltype(home)();
+  missionLink = MissionLink();
 }
 
 void checkOutput(Port& s) {
@@ -206,6 +216,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             case 0: d.emit(evBool, (type & 1) != 0); break;
             case 1: d.emit(evU16, (uint16_t)(type * 257u)); break;
             default: d.emit(evF32, (float)type / 7.0f); break;
+          }
+          switch ((type >> 1) % 5) {  // the sketch's mission reports
+            case 0: d.progress(drive, (float)seq); break;
+            case 1: d.finish(drive, (float)id); break;
+            case 2: d.fail(drive, (uint8_t)(type | 1)); break;
+            case 3: d.progress(home); break;
+            default: d.finish(home); break;
           }
         }
       } else if (dt == 0xFE) {

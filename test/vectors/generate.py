@@ -41,6 +41,7 @@ def _sibling(name: str) -> Any:
 session_rules = _sibling("session_rules")  # the session rules of PROTOCOL.md section 8
 both_frames = _sibling("both_frames")  # frames of both directions (PROTOCOL.md 10)
 large_frames = _sibling("large_frames")  # large values in fragments, variable-length arrays (PROTOCOL.md 12)
+missions_frames = _sibling("missions_frames")  # frames of missions (PROTOCOL.md 11)
 
 # ---------------------------------------------------------------------------------------------- CRC
 
@@ -546,6 +547,7 @@ def main() -> int:
         "session/rules.json": session_rules.gen(),  # a folder of its own: the wire suites load *.json here
         "both/frames.json": both_frames.gen(),  # likewise: frames of both directions, with a direction
         "large/frames.json": large_frames.gen(),  # likewise: fragments and lists, with exchanges
+        "missions/frames.json": missions_frames.gen(),  # likewise: frames of missions, with a direction
     }
     changed = []
     for name, doc in files.items():

@@ -64,6 +64,9 @@ for cpu in "${CPUS[@]}"; do
 		# 4. the example that talks to the hub's own channels (remote(), remoteAction(), remoteEvent())
 		compile "$cpu" thermostat "$ROOT/examples/Thermostat/Thermostat.ino" "$OUT/$cpu/sketch/Thermostat.o" \
 			-x c++ -DARDUINO=10819 -I"$SCRIPT_DIR/include" -I"$ROOT/src"
+		# 5. a sketch with a mission (mission(), hub.progress(), finish(), fail())
+		compile "$cpu" missions "$ROOT/examples/Missions/Missions.ino" "$OUT/$cpu/sketch/Missions.o" \
+			-x c++ -DARDUINO=10819 -I"$SCRIPT_DIR/include" -I"$ROOT/src"
 	fi
 done
 

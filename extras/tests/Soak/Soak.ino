@@ -17,6 +17,12 @@
 // hub returns it + 1), one request at a time, every 20 ms; the hub sends strictly increasing `tick`
 // events. The sketch counts what became of each: acked or failed, right or wrong answers, ticks
 // applied twice or skipped.
+//
+// Missions: the hub starts `count` with a goal n (u16) over and over; the sketch reports progress
+// 1, 2, ... below n, a step every 5 ms (a newer value replaces one not yet sent), and finishes with
+// n * 1000 + its run number; a goal of 999 fails with code 9 at step 3, a goal of 0 is refused. It
+// counts the starts it accepted (`missionStarts`): a start applied twice shows there.
+// (33 channels: the soak's emulator is built with HUBWIRE_MAX_CHANNELS=40, CMakeLists.txt.)
 #include <Hubwire.h>
 
 Hubwire hub(Serial);
@@ -60,6 +66,30 @@ uint32_t ticks, tickFirst, tickLast, tickTwice, tickGaps;
 uint8_t lastHubFailure;
 uint8_t hubQueuedNow;     // hub.hubQueued() as of the last loop(): 0 once every request ended
 uint32_t hubAt;
+
+hubwire::Mission<uint32_t(uint16_t), uint16_t> count;
+uint16_t countGoal, countStep;
+uint32_t countAt;
+uint32_t missionStarts;
+
+bool startCount(uint16_t goal) {
+  if (goal == 0) return false;  // refused: REJECTED
+  ++missionStarts;
+  countGoal = goal;
+  countStep = 0;
+  countAt = millis();
+  return true;
+}
+void cancelCount() {}  // nothing to stop: the run ends as cancelled
+
+void runCount() {
+  if (!count.running() || millis() - countAt < 5) return;
+  countAt = millis();
+  ++countStep;
+  if (countGoal == 999 && countStep == 3) hub.fail(count, 9);
+  else if (countStep >= countGoal) hub.finish(count, (uint32_t)countGoal * 1000 + count.run());
+  else hub.progress(count, countStep);
+}
 
 void countWrite() { ++applied; }
 
@@ -168,6 +198,8 @@ HUBWIRE_CHANNELS(channels, device("soak").firmware("1.0.0"),
   expose("tick_twice", tickTwice),
   expose("tick_gaps", tickGaps),
   expose("last_hub_failure", lastHubFailure),
+  mission("count", count, startCount, cancelCount).describe("progress 1..n-1, result n * 1000 + run"),
+  expose("missionStarts", missionStarts),
   remote("tally", tallyToken).writeOnly(),
   remoteAction("bump", bump),
   remoteEvent("tick", tick).onChange(tickChanged));
@@ -193,5 +225,6 @@ void loop() {
   hub.update();
   readSensors();
   driveHub();
+  runCount();
   hubQueuedNow = hub.hubQueued();
 }

@@ -249,6 +249,13 @@ class AsyncRemoteDevice:
         raw = await self.control_raw(ch, payload, timeout)
         return None if raw is None or ch.returns is None else ch.returns.decode(raw)
 
+    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
+        """Missions are not routed through the service: a clear error (after checking the name)."""
+        from ..job import NOT_ROUTED
+
+        ops.mission_start(self._desc, name, goal)  # a non-mission or a bad goal says so first
+        raise HubwireError(NOT_ROUTED)
+
     def sample(self, ch: Channel, s: Dict[str, Any]) -> StreamSample:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),
                             int(s["lost"]), time.monotonic(), int(s["gap"]))

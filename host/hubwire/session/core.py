@@ -26,6 +26,7 @@ from .discovery import Discovery
 from .events import Events
 from .hub_channels import HubSide
 from .link import HELLO_INTERVAL, HelloOutcome, Link
+from .missions import Missions
 from .records import LinkHealth, State, Stats
 from .streams import Streams
 from .transactions import Transactions
@@ -76,6 +77,7 @@ class SessionCore:
         self.discovery = Discovery(self, DescriptorCache(cache_dir))
         self.events = Events(self)
         self.streams = Streams(self)
+        self.missions = Missions(self)
         self._discovering: Optional["asyncio.Task[None]"] = None
         self._discovery_timer: Optional[asyncio.TimerHandle] = None
         self._changed: "asyncio.Future[None]" = self.loop.create_future()
@@ -211,6 +213,7 @@ class SessionCore:
         self.hub.close()
         self.link.close()
         self.events.close()
+        self.missions.close()
         self._notify()
 
     def ready_by(self, deadline: float) -> bool:
@@ -251,6 +254,8 @@ class SessionCore:
             self.streams.on_sample(f, now)
         elif t == m.EVENT:
             self.events.on_event(f, now)
+        elif t == m.MISSION:
+            self.missions.on_update(f)
         else:
             # unknown type or a request type the hub never answers: dropped and counted
             self.link.decoder.dropped += 1
@@ -291,6 +296,7 @@ class SessionCore:
         self.hub.link_down()
         self.descriptor_nonce = None  # rediscover (from the cache if the hash is known)
         self.tx.fail_all(LinkLost("device rebooted"))
+        self.missions.rebooted()
         self.streams.interrupt()  # subscribed again once rediscovered
         if self.state is State.READY:
             self._lost_callbacks()  # it was up but we had not noticed the reboot: report the loss too
@@ -306,6 +312,8 @@ class SessionCore:
         h = self.link.device_hello
         self.state = State.READY if h is not None and self.descriptor_nonce == h.nonce else State.CONNECTING
         self.stats.link_restored += 1
+        if h is not None:
+            self.missions.restored(h.nonce)
         log.info("hubwire: link to %s restored", self.url)
         for cb in list(self.link_restored_cbs):
             self.dispatch(cb)
@@ -324,6 +332,7 @@ class SessionCore:
         exc = LinkLost(f"link to {self.url} lost ({why})")
         self.tx.fail_all(exc)
         self.hub.link_down()
+        self.missions.link_down()  # runs go on on the board; their updates wait for the link
         self.streams.interrupt()  # streams ride through: subscribed again once the link is back
         self._notify()
         if was_up:

@@ -81,6 +81,10 @@ class Stats:
     hub_events_refused: int = 0
     hub_events_skipped: int = 0
     hub_event_retries: int = 0
+    # missions: updates delivered, repeats acked again, updates of runs this hub does not know
+    mission_updates: int = 0
+    duplicate_mission_updates: int = 0
+    unknown_mission_updates: int = 0
 
     def as_dict(self) -> Dict[str, int]:
         """The counters as a plain dict (a snapshot)."""

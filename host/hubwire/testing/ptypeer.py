@@ -61,6 +61,9 @@ class PtyPeer:
     def handle(self, f: Frame) -> None:
         raise NotImplementedError
 
+    def tick(self) -> None:
+        """Called on the peer's thread every pass of its loop (about every 20 ms): retries, timers."""
+
     def _run(self) -> None:
         dec = FrameDecoder(self.max_payload)
         beat, n = 0.0, 0
@@ -74,6 +77,7 @@ class PtyPeer:
                 for f in dec.feed(data) if not self.mute else ():
                     self.linked = self.linked or f.type == m.HELLO
                     self.handle(f)
+            self.tick()
             if self.linked and time.monotonic() - beat >= 0.25:
                 n += 1
                 self.send(m.HEARTBEAT, n & 0xFF, 0, m.Heartbeat(n, 0 if n == 1 else self.beat_ms, 0, 0, 0).pack())

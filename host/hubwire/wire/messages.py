@@ -12,7 +12,7 @@ __all__ = [
     "PROTOCOL_VERSION", "HELLO", "HEARTBEAT", "CHUNK", "REQUEST", "RESPONSE", "CONTROL", "ACK", "NAK",
     "EVENT", "SUBSCRIBE", "SAMPLE", "TYPE_NAMES", "FLAG_DEVICE", "FLAG_REPLY", "FLAG_F64",
     "NakCode", "nak_name", "fnv1a32", "Hello", "Heartbeat", "ChunkRequest", "Chunk", "Subscribe",
-    "SubscribeAck", "Sample", "Nak", "BindReport", "describe", "FRAGMENT", "Fragment",
+    "SubscribeAck", "Sample", "Nak", "BindReport", "describe", "FRAGMENT", "Fragment", "MISSION",
 ]
 
 PROTOCOL_VERSION = 1
@@ -29,11 +29,13 @@ EVENT = 0x21  # '!'
 SUBSCRIBE = 0x53  # 'S'
 SAMPLE = 0x44  # 'D'
 FRAGMENT = 0x46  # 'F': one piece of a message too long for one frame (PROTOCOL.md 12)
+MISSION = 0x4D  # 'M': mission update, device to hub (PROTOCOL.md 11)
 
 TYPE_NAMES: Dict[int, str] = {
     HELLO: "hello", HEARTBEAT: "heartbeat", CHUNK: "chunk", REQUEST: "request", RESPONSE: "response",
     CONTROL: "control", ACK: "ack", NAK: "nak", EVENT: "event", SUBSCRIBE: "subscribe", SAMPLE: "sample",
     FRAGMENT: "fragment",
+    MISSION: "mission_update",
 }
 
 FLAG_DEVICE = 0x01
@@ -312,9 +314,16 @@ def describe(frame: Frame, kind: Optional[str] = None) -> Dict[str, Any]:
     """Decode a frame's payload into a dict ``{"kind": ..., fields...}`` (format of frames.json).
 
     ``kind`` disambiguates ``J`` (``chunk_request`` / ``chunk``; by default a 3-byte ``J`` payload is
-    a request) and names a ``C`` with id 0 from the hub ``bind_report``. Byte strings are given as lowercase hex. Raises PayloadError on a bad length.
+    a request), names a ``C`` with id 0 from the hub ``bind_report`` and the frames of missions
+    (``mission_start``, ``mission_cancel``, ``mission_state``; ``M`` is ``mission_update``). Byte strings are given as lowercase hex. Raises PayloadError on a bad length.
     """
     t, p = frame.type, frame.payload
+    if t == MISSION or (kind or "").startswith("mission_"):
+        from .missions import describe_mission
+
+        mission = describe_mission(frame, kind or "")
+        if mission is not None:
+            return mission
     if t == HELLO:
         h = Hello.unpack(p)
         hello = {"kind": "hello", "version": h.version, "flags": h.flags, "nonce": h.nonce,

@@ -53,6 +53,11 @@ def test_soak_exactly_once_no_corruption_no_reset(emulator_bin: str, tmp_path: A
         c = boot["device"]
         assert c["tally_acked"] > 50 and c["bump_ok"] > 10 and c["ticks"] > 50, boot
     assert r["hub_channels"]["device_duplicates"] > 0 and r["hub_channels"]["hub_event_retries"] > 0
+    # missions ran all along (check() holds them to 0 lost, 0 duplicated, 0 corrupt)
+    m = r["missions"]
+    assert m is not None, "the soak sketch declares no mission"
+    assert m["started"] > 20 and m["progress"] > 50 and m["succeeded"] > 10, m
+    assert [b["device_starts"] for b in m["boots"]] == [b["hub_starts"] for b in m["boots"]] or m["start_unknown"], m
 
 
 def test_connect_and_discover_through_a_lossy_link(emu: Any) -> None:

@@ -1,6 +1,6 @@
 """End to end: every example sketch, built for the Uno and run in simavr, discovered by the real hub
-and doing what its comments teach. Rover, Thermostat and LargeValues have their own files
-(test_rover_on_uno.py, test_thermostat_on_uno.py, test_large_values_on_uno.py)."""
+and doing what its comments teach. Rover, Thermostat, LargeValues and Missions have their own files
+(test_rover_on_uno.py, test_thermostat_on_uno.py, test_large_values_on_uno.py, test_missions_on_uno.py)."""
 from __future__ import annotations
 
 import os
@@ -49,7 +49,7 @@ DECLARED = {
 def test_every_example_has_an_end_to_end_test() -> None:
     on_disk = sorted(d for d in os.listdir(os.path.join(REPO, "examples"))
                      if os.path.isfile(os.path.join(REPO, "examples", d, d + ".ino")))
-    assert on_disk == sorted(list(DECLARED) + ["LargeValues", "Rover", "Thermostat"])  # each with a file of its own
+    assert on_disk == sorted(list(DECLARED) + ["LargeValues", "Missions", "Rover", "Thermostat"])  # each with a file of its own
 
 
 @pytest.mark.parametrize("sketch", sorted(DECLARED))

@@ -15,7 +15,14 @@
 
 namespace hubwire {
 
-enum Access : uint8_t { kReadable = 1, kWritable = 2, kCallable = 4, kEventAccess = 8, kStreamable = 16 };
+enum Access : uint8_t {
+  kReadable = 1,
+  kWritable = 2,
+  kCallable = 4,
+  kEventAccess = 8,
+  kStreamable = 16,
+  kMissionAccess = 32,  // a mission (session/missions.h): started, cancelled and read with its own ops
+};
 enum ChannelFlags : uint8_t { kHasRange = 1, kHasFailsafe = 2 };
 
 // A declared event: keep one per event (a global), emit with Session::emit().
@@ -41,6 +48,15 @@ struct RemoteAction<R()> {
 // little-endian bytes. call points to that function's pointer, kept in flash with its own type.
 // Returns false when the function refused the value (controls returning bool).
 typedef bool (*Thunk)(const void* call, const uint8_t* arg, uint8_t* ret);
+
+// Copies n bytes of a table's flash (HUBWIRE_FLASH) into RAM.
+inline void flashCopy(void* to, const void* from, size_t n) {
+#if defined(__AVR__)
+  memcpy_P(to, from, n);
+#else
+  memcpy(to, from, n);
+#endif
+}
 
 template <typename F>
 F functionAt(const void* call) {

@@ -15,6 +15,7 @@
 // the JSON they become (json.h; a struct's layout: layout.h), the flash tables with their checks
 // (tables.h) and the hub channels' table (hub_table.h).
 #include "dsl.h"
+#include "mission.h"
 #include "remote.h"
 #include "tables.h"
 #include "hub_table.h"
@@ -30,7 +31,7 @@
 
 /// Declares a sketch's channels at file scope, outside any namespace (it defines
 /// hubwire::sketchFeatures, features.h); `var` is then what begin() takes. After the device:
-/// expose(), control(), action() and event() (dsl.h), with their options, and what the sketch
+/// expose(), control(), action() and event() (dsl.h), mission() (mission.h), with their options, and what the sketch
 /// expects of the hub: remote(), remoteAction() and remoteEvent() (remote.h).
 ///   HUBWIRE_CHANNELS(channels, "minimal", expose("blink_ms", blinkMs).writable(), event("button", button));
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
@@ -70,6 +71,20 @@
   HUBWIRE_LARGE_MEMBER(var, uint16_t const, capacity, hubwire_channels_##var::largeIn)              \
   HUBWIRE_LARGE_MEMBER(var, ::hubwire::FragmentReceiver const, receive, &::hubwire::fragmentReceived) \
   HUBWIRE_LARGE_MEMBER(var, ::hubwire::LargeSender const, send, &::hubwire::sendLarge)             \
+  template <>                                                                                      \
+  ::hubwire::HubLink* const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),           \
+      ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
+                      hubwire_channels_##var::Tag>::type>::link HUBWIRE_UNUSED =                   \
+      ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
+                                     &hubwire_channels_##var::declared>::link();                   \
+  HUBWIRE_MISSIONS_HOOK(                                                                           \
+  template <>                                                                                      \
+  bool (*const ::HubwireMissions<                                                                  \
+      ::hubwire::declare::anyMission(hubwire_channels_##var::declared.list),                       \
+      ::HubwireHubTag<::hubwire::declare::anyMission(hubwire_channels_##var::declared.list),       \
+                      hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, uint8_t) \
+      HUBWIRE_UNUSED = ::hubwire::declare::MissionHookOf<                                          \
+          ::hubwire::declare::anyMission(hubwire_channels_##var::declared.list)>::dispatch();)     \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>( \
           hubwire_channels_##var::json, hubwire_channels_##var::infos)
@@ -83,11 +98,15 @@
                       ::HubwireHubTag<hubwire_channels_##var::large, hubwire_channels_##var::Tag>::type>::member \
       HUBWIRE_UNUSED = value;
 
-// The sketch's features, for the session to test (features.h); none with HUBWIRE_ALL_FEATURES.
+// The sketch's features, for the session to test (features.h), and the missions' hook
+// (session/missions.h); neither with HUBWIRE_ALL_FEATURES, whose programs (several tables) get the
+// library's defaults built with it: every feature, missions reachable (session/mission_flag.cpp).
 #if defined(HUBWIRE_ALL_FEATURES)
 #define HUBWIRE_SKETCH_FEATURES(f)
+#define HUBWIRE_MISSIONS_HOOK(...)
 #else
 #define HUBWIRE_SKETCH_FEATURES(f) const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;
+#define HUBWIRE_MISSIONS_HOOK(...) __VA_ARGS__
 #endif
 
 #endif

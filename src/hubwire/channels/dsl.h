@@ -40,7 +40,8 @@ struct IsNumeric<StructValue> {
 };
 
 // kRemote...: what the sketch expects of the hub (remote.h), listed under "hub" in the descriptor.
-enum Kind : uint8_t { kVariable, kControl, kAction, kEvent, kRemote, kRemoteAction, kRemoteEvent };
+// kMission: a long action (mission.h).
+enum Kind : uint8_t { kVariable, kControl, kAction, kEvent, kMission, kRemote, kRemoteAction, kRemoteEvent };
 
 // Set while declaring when a range or failsafe value changes on its way into the channel's type
 // (300 for a uint8_t, -1.5 for an int16_t); Checked<> turns it into a compile error.
@@ -49,6 +50,8 @@ const uint8_t kLossyValue = 0x80;
 // function may be declared before HUBWIRE_CHANNELS and defined after it (GCC 5 cannot compare the
 // address of a function not yet defined with nullptr while compiling).
 const uint8_t kOnChangeGiven = 0x40;
+// Set by progressMax() (a mission's "pmax").
+const uint8_t kHasProgressMax = 0x20;
 
 template <typename T>
 struct IsFloat {
@@ -89,7 +92,7 @@ constexpr Piece number(const char*, NotNumeric) { return empty(); }
 constexpr Piece number(const char*, StructValue) { return empty(); }
 
 // ---- one declaration ----
-const uint8_t kPiecesPerChannel = 14;
+const uint8_t kPiecesPerChannel = 16;
 
 // T: the scalar type a range or failsafe takes (NotNumeric if none). K: what was declared. Call:
 // the type of the function a control or action calls, kept as itself (a constant expression cannot
@@ -139,7 +142,8 @@ class Decl {
   ///   expose("left", left).writable().failsafe(0.0f)
   template <typename U>
   constexpr Decl failsafe(U value) const {
-    static_assert(K == kVariable || K == kControl, "failsafe(): only a variable or a control has a failsafe value");
+    static_assert(K != kMission, "failsafe(): a mission has no failsafe value (stop it in the sketch's onLinkLost())");
+    static_assert(K == kVariable || K == kControl || K == kMission, "failsafe(): only a variable or a control has a failsafe value");
     static_assert(!(K == kVariable || K == kControl) || IsNumeric<T>::value,
                   "failsafe(): only a number (or an array of numbers) has a failsafe value");
     return Decl(*this, unit_, description_, access_,
@@ -152,6 +156,13 @@ class Decl {
     static_assert(K == kVariable || K == kRemoteEvent,
                   "onChange(): only a variable declared with expose() has one (a control calls its function), or remoteEvent()");
     return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kOnChangeGiven), lo_, hi_, failsafe_, fn);
+  }
+
+  /// A mission's progress value at completion (the hub draws a bar from 0 to it; informative).
+  ///   mission("drive", drive, startDrive, cancelDrive).progressMax(2.0f)
+  constexpr Decl progressMax(float max) const {
+    static_assert(K == kMission, "progressMax(): only a mission has progress");
+    return Decl(*this, max);
   }
 
   /// A hub value the sketch only writes (never requests).
@@ -168,8 +179,10 @@ class Decl {
     return Decl<T, K2, Call>(name_, layout_, data_, code_, count_, ret_, access, call_, thunk_, memSize_, retCount_);
   }
   constexpr Decl(const char* name, const char* layout, void* data, TypeCode code, uint8_t count,
-                 TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0, uint8_t retCount = 0)
-      : memSize_(memSize), retCount_(retCount), name_(name), layout_(layout), unit_(nullptr), description_(nullptr), data_(data),
+                 TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0, uint8_t retCount = 0,
+                 TypeCode progress = kVoid)
+      : memSize_(memSize), retCount_(retCount), progress_(progress), progressMax_(0), name_(name), layout_(layout),
+        unit_(nullptr), description_(nullptr), data_(data),
         call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
         flags_(0), lo_(), hi_(), failsafe_() {}
 
@@ -182,13 +195,15 @@ class Decl {
          : k == 4 ? (count_ ? integer(isListCode(code_) ? ",\"vc\":" : ",\"c\":", count_) : empty())
          : k == 5 ? (layout_ ? Piece{",\"f\":[", kFields, 0, 0, layout_, "]"} : empty())
          : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", elementOf(ret_)) : empty())
-         : k == 12 ? (retCount_ ? integer(",\"rvc\":", retCount_) : empty())
-         : k == 7 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
-         : k == 8 ? (flags_ & kHasRange ? number(",\"min\":", lo_) : empty())
-         : k == 9 ? (flags_ & kHasRange ? number(",\"max\":", hi_) : empty())
-         : k == 10 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
-         : k == 11 ? (description_ ? quoted(",\"d\":\"", description_) : empty())
-                   : literal("}");  // k == 13
+         : k == 7 ? (progress_ != kVoid ? typeNamed(",\"pt\":\"", progress_) : empty())
+         : k == 8 ? (flags_ & kHasProgressMax ? number(",\"pmax\":", progressMax_) : empty())
+         : k == 9 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
+         : k == 10 ? (flags_ & kHasRange ? number(",\"min\":", lo_) : empty())
+         : k == 11 ? (flags_ & kHasRange ? number(",\"max\":", hi_) : empty())
+         : k == 12 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
+         : k == 13 ? (description_ ? quoted(",\"d\":\"", description_) : empty())
+         : k == 14 ? (retCount_ ? integer(",\"rvc\":", retCount_) : empty())
+                   : literal("}");  // k == 15
   }
   constexpr size_t jsonLength(uint8_t id, uint8_t k = 0) const {
     return k == kPiecesPerChannel ? 0 : pieceLength(piece(k, id)) + jsonLength(id, (uint8_t)(k + 1));
@@ -216,7 +231,8 @@ class Decl {
   constexpr const char* name() const { return name_; }
   constexpr Call call() const { return call_; }
   // Does the session call a function for this channel: a control's or action's, or onChange()'s?
-  constexpr bool hasCall() const { return K == kControl || K == kAction || (flags_ & kOnChangeGiven); }
+  constexpr bool hasCall() const { return K == kControl || K == kAction || K == kMission || (flags_ & kOnChangeGiven); }
+  constexpr bool isMission() const { return K == kMission; }
   constexpr uint16_t memSize() const { return memSize_; }
   // Bytes of the value on the wire at most (a list or string full), 0 for none.
   constexpr uint16_t wireBytes() const {
@@ -238,7 +254,8 @@ class Decl {
   constexpr uint16_t features() const {
     return (uint16_t)((access_ & kStreamable ? kUsesStreams : 0) | (flags_ & kHasFailsafe ? kUsesFailsafes : 0) |
                       (code_ == kStr ? kUsesStrings : 0) | (code_ == kStruct ? kUsesStructs : 0) |
-                      (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid ? kUsesReturns : 0) | (isListCode(ret_) ? kUsesLists : 0) |
+                      (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid && K != kMission ? kUsesReturns : 0) |
+                      (isListCode(ret_) ? kUsesLists : 0) | (K == kMission ? kUsesMissions : 0) |
                       (K == kEvent ? kUsesEvents : 0) | (flags_ & kHasRange ? kUsesRanges : 0) |
                       (access_ & kWritable && K == kVariable ? kUsesWrites : 0) | (access_ & kReadable ? kUsesReads : 0) |
                       (isListCode(code_) ? kUsesLists : 0) | (large() ? kUsesLarge : 0));
@@ -247,12 +264,21 @@ class Decl {
  private:
   constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
                  T failsafe, Call call)
-      : memSize_(d.memSize_), retCount_(d.retCount_), name_(d.name_), layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
+      : memSize_(d.memSize_), retCount_(d.retCount_), progress_(d.progress_), progressMax_(d.progressMax_), name_(d.name_),
+        layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
         call_(call), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
         ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
+  constexpr Decl(const Decl& d, float progressMax)
+      : memSize_(d.memSize_), retCount_(d.retCount_), progress_(d.progress_), progressMax_(progressMax), name_(d.name_),
+        layout_(d.layout_),
+        unit_(d.unit_), description_(d.description_), data_(d.data_), call_(d.call_), thunk_(d.thunk_), code_(d.code_),
+        count_(d.count_), ret_(d.ret_), access_(d.access_), flags_((uint8_t)(d.flags_ | kHasProgressMax)), lo_(d.lo_),
+        hi_(d.hi_), failsafe_(d.failsafe_) {}
 
   uint16_t memSize_;  // structs: sizeof the struct, to check the layout against
   uint8_t retCount_;  // an action returning a List: its capacity ("rvc")
+  TypeCode progress_;  // missions: the progress value's type
+  float progressMax_;  // missions: progressMax()
   const char* name_;
   const char* layout_;
   const char* unit_;

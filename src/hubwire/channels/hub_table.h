@@ -11,6 +11,7 @@
 #ifndef HUBWIRE_CHANNELS_HUB_TABLE_H
 #define HUBWIRE_CHANNELS_HUB_TABLE_H
 
+#include "../session/hub_link.h"
 #include "tables.h"
 
 namespace hubwire {
@@ -35,11 +36,14 @@ template <bool Declared, typename Tag>
 struct HubwireHub {
   static const ::hubwire::HubTable* const table;
   static bool (*const dispatch)(::hubwire::Session& s, bool frame);
+  static ::hubwire::HubLink* const link;  // the hub link, for missions to share its counter
 };
 template <>
 const ::hubwire::HubTable* const HubwireHub<true, void>::table;
 template <>
 bool (*const HubwireHub<true, void>::dispatch)(::hubwire::Session& s, bool frame);
+template <>
+::hubwire::HubLink* const HubwireHub<true, void>::link;
 template <bool Declared, typename Tag>
 struct HubwireHubTag {
   typedef void type;
@@ -125,13 +129,16 @@ struct HubTableOf {
   template <typename OwnerInfos, const OwnerInfos* Owner>
   static constexpr const HubTable* get() { return nullptr; }
   static constexpr bool (*dispatch())(Session&, bool) { return nullptr; }
+  static constexpr HubLink* link() { return nullptr; }
 };
 template <typename D, const D* Decls>
 struct HubTableOf<D, Decls, true> {
   template <typename OwnerInfos, const OwnerInfos* Owner>
   static constexpr const HubTable* get() { return &HubTableFlash<D, Decls, OwnerInfos, Owner>::value; }
   static constexpr bool (*dispatch())(Session&, bool) { return &hubDispatch; }
+  static constexpr HubLink* link() { return &hubLink; }
 };
+
 
 }  // namespace declare
 }  // namespace hubwire

@@ -40,10 +40,10 @@ constexpr Piece number(const char* pre, float v) { return Piece{pre, kFloat, 0, 
 constexpr Piece number(const char* pre, double v) { return Piece{pre, kFloat, 0, (float)v, "", ""}; }
 constexpr Piece typeNamed(const char* pre, TypeCode t) { return Piece{pre, kLiteral, 0, 0, typeNameOf(t), "\""}; }
 
-// Access letters in the descriptor's order: r w c e s (the bits of Access, lowest first).
+// Access letters in the descriptor's order: r w c e s m (the bits of Access, lowest first).
 constexpr size_t accessLength(int64_t a) { return a ? (a & 1) + accessLength(a >> 1) : 0; }
 constexpr char accessAt(int64_t a, size_t i, size_t bit = 0) {
-  return (a & 1) ? (i == 0 ? "rwces"[bit] : accessAt(a >> 1, i - 1, bit + 1)) : accessAt(a >> 1, i, bit + 1);
+  return (a & 1) ? (i == 0 ? "rwcesm"[bit] : accessAt(a >> 1, i - 1, bit + 1)) : accessAt(a >> 1, i, bit + 1);
 }
 
 constexpr size_t valueLength(const Piece& p) {

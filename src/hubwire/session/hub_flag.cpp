@@ -8,3 +8,5 @@ template <>
 __attribute__((weak)) const ::hubwire::HubTable* const HubwireHub<true, void>::table = nullptr;
 template <>
 __attribute__((weak)) bool (*const HubwireHub<true, void>::dispatch)(::hubwire::Session&, bool) = nullptr;
+template <>
+__attribute__((weak))::hubwire::HubLink* const HubwireHub<true, void>::link = nullptr;

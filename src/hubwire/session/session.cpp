@@ -17,6 +17,11 @@ __attribute__((always_inline)) static inline bool hubHook(Session& s, bool frame
   return HubwireHub<true, void>::dispatch && HubwireHub<true, void>::dispatch(s, frame);
 }
 
+// The missions' hooks (missions.cpp), folded away likewise for a sketch without missions.
+__attribute__((always_inline)) static inline bool missionHook(Session& s, uint8_t what) {
+  return HubwireMissions<true, void>::dispatch && HubwireMissions<true, void>::dispatch(s, what);
+}
+
 Session::Session(Port& port)
     : SessionState(),  // all zero
       port_(port),
@@ -122,6 +127,7 @@ void Session::update() {
     ++rx_.counters.dropped;
   }
   hubHook(*this, false);  // sends and retries the sketch's requests
+  missionHook(*this, kMissionPoll);  // sends and retries mission updates (missions.cpp)
   if (!linked_) {
     if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
       lastSent_ = now;
@@ -175,6 +181,7 @@ void Session::handle(const Frame& f) {
   lastTxnControl_ = f.type == kMsgControl;
   lastTxnSeq_ = f.seq;
   lastTxnId_ = f.id;
+  if (missionHook(*this, kMissionFrame)) return;  // a mission's start, cancel or state
   switch (f.type) {
     case kMsgChunk:
       onChunk(f);
@@ -244,6 +251,7 @@ void Session::loseLink() {
 
 void Session::onAck(const Frame& f, bool nak) {
   (void)nak;  // a NAKed event is not retried either: the hub has seen it and refused it
+  if (missionHook(*this, kMissionAck)) return;  // a mission update's answer
   if (uses(kUsesEvents) && events_.acked(f.seq, f.id)) return;
   hubHook(*this, true);  // an answer to the device's own request?
 }

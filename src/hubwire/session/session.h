@@ -22,6 +22,7 @@
 #include "event_queue.h"
 #include "fragments.h"
 #include "hub_link.h"
+#include "missions.h"
 #include "streams.h"
 
 namespace hubwire {
@@ -200,8 +201,46 @@ class Session : private SessionState {
   ///   if (hub.hubQueued() == HUBWIRE_HUB_QUEUE) { /* full */ }
   uint8_t hubQueued() const { return hubLink.queued; }
 
+  // ---- missions, declared with mission() (missions.h): the sketch reports from loop(); each call
+  // returns at once, false when the mission has no run going. ----
+
+  /// The run's progress; a newer value replaces one not yet sent (the latest wins).
+  ///   hub.progress(drive, metres);
+  template <typename S, typename P>
+  bool progress(Mission<S, P>& m, const typename Same<P>::type& value) {
+    return missionReport(m, kMissionProgress, &value, sizeof(P), m.progress_);
+  }
+  template <typename S>
+  bool progress(Mission<S, void>& m) { return missionReport(m, kMissionProgress, nullptr, 0, m.progress_); }
+  /// Ends the run as succeeded, with its result (none for a void result); sent after the progress
+  /// already sent, in place of a progress not yet sent.
+  ///   hub.finish(drive, metres);
+  template <typename S, typename P>
+  bool finish(Mission<S, P>& m, const typename Same<typename Mission<S, P>::Result>::type& result) {
+    return missionReport(m, kMissionSucceeded, &result, sizeof(result), m.result_);
+  }
+  template <typename G, typename P>
+  bool finish(Mission<void(G), P>& m) { return missionReport(m, kMissionSucceeded, nullptr, 0, m.result_); }
+  template <typename P>
+  bool finish(Mission<void(), P>& m) { return missionReport(m, kMissionSucceeded, nullptr, 0, m.result_); }
+  /// Ends the run as failed with the sketch's own code (1..255).
+  ///   hub.fail(drive, kBlocked);
+  template <typename S, typename P>
+  bool fail(Mission<S, P>& m, uint8_t code) {
+    return code != 0 && missionReport(m, kMissionFailed, &code, 1, m.result_);
+  }
 
  private:
+  // Missions (missions.cpp), reached only when the sketch declares one.
+  friend bool missionDispatch(Session& s, uint8_t what);
+  HubLink* missionHubLink();
+  bool missionFrame(const Frame& f);
+  bool missionAck(const Frame& f);
+  void missionPoll(uint16_t now);
+  uint8_t missionStart(const Frame& f, const ChannelInfo& ch, MissionState& m);
+  uint8_t missionTake();
+  void missionSend();
+
   // The hub's own channels (hub_link.cpp), reached only through the sketch's hub table.
   friend bool hubDispatch(Session& s, bool frame);
   bool hubMine();

@@ -36,6 +36,18 @@ void delay(unsigned long ms);
 void delayMicroseconds(unsigned int us);
 }
 
+// ---- digital pins ----------------------------------------------------------------------------
+#define HIGH 0x1
+#define LOW 0x0
+#define INPUT 0x0
+#define OUTPUT 0x1
+#define LED_BUILTIN 13
+extern "C" {
+void pinMode(uint8_t pin, uint8_t mode);
+void digitalWrite(uint8_t pin, uint8_t value);
+int digitalRead(uint8_t pin);
+}
+
 typedef bool boolean;
 typedef uint8_t byte;
 

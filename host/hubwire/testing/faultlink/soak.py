@@ -23,6 +23,8 @@ clean moment of the link and closed before each of the two events.
 
 Large values run all along too (:class:`.soak_large.BlobLoad`): the sketch's 40-byte ``blob``
 written and read back in fragments, counted per boot: 0 lost, 0 duplicated, 0 corrupt.
+Missions run all along as well (:class:`.soak_missions.MissionTraffic`): runs started, followed,
+sometimes cancelled, one cut short by the reboot; none lost, duplicated or corrupt.
 
 The other direction runs all along (:class:`.soak_hub.HubTraffic`): the sketch writes tokens into
 the hub's ``tally`` and calls its ``bump``, the hub sends ``tick`` events; each boot's counts are
@@ -45,6 +47,7 @@ from .. import repo_root
 from . import FaultLink, Faults, stop_process
 from .soak_hub import HubTraffic, check_hub_boots
 from .soak_large import BlobLoad, check_blob_boot
+from .soak_missions import MissionTraffic, check_missions
 from .soak_load import Load, check_segment, first_after, retry, value_for, wait_for
 
 __all__ = ["SOAK_FAULTS", "run_soak", "check", "value_for", "soak_emulator_binary"]
@@ -89,6 +92,7 @@ class _Run:
         self.load: Any = None
         self.blobs: Any = None
         self.traffic = HubTraffic()
+        self.missions = MissionTraffic(log)
         self.report: Dict[str, Any] = {}
 
     def set_faults(self, f: Faults) -> None:
@@ -107,6 +111,7 @@ class _Run:
         self.load = Load(self.dev, self.log)
         self.blobs = BlobLoad(self.dev, self.log)
         self.traffic.start(self.dev)
+        self.missions.start(self.dev)
 
     def open_streams(self) -> None:
         """Subscribe on a clean moment (subscribing is not what is tested here), again until it
@@ -137,6 +142,7 @@ class _Run:
             self.load.step()
             self.blobs.step()
             self.traffic.step(self.dev)
+            self.missions.step(self.dev)
             self._revive_streams()
 
     def _revive_streams(self) -> None:
@@ -166,6 +172,7 @@ class _Run:
             load.step()
             self.blobs.step()
             self.traffic.step(dev)
+            self.missions.step(dev)
         lost = load.lost[lost0:]
         self.set_faults(self.faults)
         t_back = time.monotonic()
@@ -187,7 +194,9 @@ class _Run:
         load.close_segment(final=False)
         self.blobs.close_boot()
         self.traffic.close_boot(dev)
+        self.missions.close_boot(dev)
         self.set_faults(self.faults)
+        cut = self.missions.cut_by_reboot(dev)  # a run going when the board dies: MissionLost
         r0, dl0 = len(load.reconnects), dev.session.stats.downloads
         self.emu.kill()
         self.emu.wait(5)
@@ -197,7 +206,9 @@ class _Run:
         self.report["reboot"] = {"reconnected": ok, "seconds": round(time.monotonic() - t, 2),
                                  "downloads": dev.session.stats.downloads - dl0,
                                  "cache_hits": dev.session.stats.cache_hits}
+        self.missions.ended_by_reboot(cut)
         self.traffic.start(dev)
+        self.missions.start(dev)
         self.open_streams()
 
     def close(self) -> None:
@@ -237,6 +248,7 @@ def run_soak(*, seconds: Optional[float] = None, frames: Optional[int] = None, s
         run.load.close_segment(final=True)
         run.blobs.close_boot()
         run.traffic.close_boot(run.dev)
+        run.missions.close_boot(run.dev)
         return _result(run, elapsed, during, f0, frames, seed)
     finally:
         run.close()
@@ -277,6 +289,7 @@ def _result(run: _Run, elapsed: float, during: Dict[str, Any], f0: int, frames: 
         "hub_channels": {"boots": run.traffic.boots, "ticks_notified": run.traffic.notified,
                          **{k: stats[k] for k in ("device_writes", "device_calls", "device_duplicates",
                                                   "hub_events_delivered", "hub_event_retries", "binds_sent")}},
+        "missions": run.missions.report(),
     }
 
 
@@ -313,6 +326,7 @@ def check(r: Dict[str, Any]) -> List[str]:
         bad.append(f"{len(r['blobs']['boots'])} boots of large values accounted, expected 2")
     for i, b in enumerate(r["blobs"]["boots"]):
         bad += check_blob_boot(i, b)
+    bad += check_missions(r.get("missions"))
     return bad
 
 
