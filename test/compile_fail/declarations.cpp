@@ -10,6 +10,9 @@ using namespace hubwire;
 struct Wide {
   uint8_t b[HUBWIRE_MAX_VALUE + 1];
 };
+struct Frameful {  // a mission's goal, result or progress too large for one frame
+  uint8_t b[HUBWIRE_MAX_PAYLOAD];
+};
 struct Pose {
   float x;
   uint8_t ok;
@@ -42,10 +45,10 @@ bool startDrive(float) { return true; }
 void stopDrive() {}
 Mission<void(), void> home;
 void startHome() {}
-Mission<Wide(float), float> wideResult;
-Mission<float(float), Wide> wideProgress;
-Mission<float(Wide), float> wideGoal;
-bool startWide(Wide) { return true; }
+Mission<Frameful(float), float> wideResult;
+Mission<float(float), Frameful> wideProgress;
+Mission<float(Frameful), float> wideGoal;
+bool startWide(Frameful) { return true; }
 
 #if HUBWIRE_CASE == 0 || HUBWIRE_CASE == 7 || HUBWIRE_CASE == 8 || HUBWIRE_CASE == 20
 #define CASE  // the control alone (7, 8, 20: with a setting too small for it; 20: 6 channels for its 9)
