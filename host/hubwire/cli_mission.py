@@ -42,6 +42,12 @@ class _Progress:
         else:
             print(f"{self.job.mission} run {self.job.run}: {fmt_value(value)}", flush=True)
 
+    def complete(self) -> None:
+        """The run succeeded: the bar shows it whole (a goal below pmax leaves it short otherwise)."""
+        if self.bar is not None:
+            self.bar.n = self.bar.total
+            self.bar.refresh()
+
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
@@ -59,6 +65,7 @@ def run_mission(dev: Device, args: argparse.Namespace) -> int:
             for value in job.feedback():
                 progress.show(value)
             result = job.result()
+            progress.complete()
         finally:
             progress.close()
     except KeyboardInterrupt:

@@ -52,6 +52,16 @@ def test_call_draws_a_bar_against_pmax_and_prints_the_result() -> None:
         assert dev.missions[DRIVE].starts == [f32(2.0)]
 
 
+def test_the_bar_is_whole_when_the_run_succeeds_short_of_pmax() -> None:
+    with MissionDevice() as dev:  # a 1 m drive against pmax 2: the run's success fills the bar
+        p = start("call", dev.path, "drive", "1.0")
+        play(dev, DRIVE, [0.5], f32(1.0))
+        out, err = p.communicate(timeout=30)
+        assert p.returncode == 0, err
+        assert out.strip() == "1"
+        assert "drive run 1:  25%" in err and "100%" in err and "2/2 m" in err
+
+
 def test_call_prints_a_line_per_value_without_pmax() -> None:
     desc = (b'{"p":1,"n":"rover","ch":[{"id":7,"n":"drive","a":"m","t":"f32","rt":"f32","pt":"f32"}]}')
     with MissionDevice(desc) as dev:
