@@ -11,11 +11,12 @@
 #ifndef HUBWIRE_CHANNELS_DECLARE_H
 #define HUBWIRE_CHANNELS_DECLARE_H
 
-// One job a header: the declarations a sketch writes (dsl.h; what it expects of the hub: remote.h),
-// the JSON they become (json.h; a struct's layout: layout.h), the flash tables with their checks
-// (tables.h) and the hub channels' table (hub_table.h).
+// One job a header: the declarations a sketch writes (dsl.h; Lists: list_dsl.h; missions: mission.h;
+// what it expects of the hub: remote.h), the JSON they become (json.h; a struct's layout: layout.h),
+// the flash tables with their checks (tables.h) and the hub channels' table (hub_table.h).
 #include "dsl.h"
 #include "mission.h"
+#include "list_dsl.h"
 #include "remote.h"
 #include "tables.h"
 #include "hub_table.h"

@@ -12,7 +12,6 @@
 #include "../wire/messages.h"
 #include "../wire/values.h"
 #include "channel.h"
-#include "list.h"
 #include "../features.h"
 #include "json.h"
 
@@ -335,14 +334,6 @@ constexpr Decl<StructValue, kVariable> expose(const char* name, T& var, const ch
                                       (uint16_t)sizeof(T));
 }
 
-/// A variable-length array of up to N scalars (list.h), carried with its length.
-///   hubwire::List<int16_t, 8> path;   expose("path", path).writable()
-template <typename T, size_t N>
-constexpr Decl<T, kVariable> expose(const char* name, ::hubwire::List<T, N>& list) {
-  return checkValue<T, 1 + N * sizeof(T)>(),
-         Decl<T, kVariable>(name, nullptr, &list, listOf(TypeOf<T>::code), (uint8_t)N, kVoid, kReadable, nullptr, nullptr);
-}
-
 /// A write-only control: the hub's value is handed to fn. A bool-returning fn may refuse it.
 ///   control("led", setLed)
 template <typename T>
@@ -352,23 +343,6 @@ constexpr Decl<T, kControl, void (*)(T)> control(const char* name, void (*fn)(T)
 template <typename T>
 constexpr Decl<T, kControl, bool (*)(T)> control(const char* name, bool (*fn)(T)) {
   return checkValue<T, sizeof(T)>(), Decl<T, kControl, bool (*)(T)>(name, nullptr, nullptr, TypeOf<T>::code, 0, kVoid, kWritable, fn, &callChecked<T>);
-}
-
-/// A control taking a List (list.h): fn gets the hub's elements.
-///   void setPath(const hubwire::List<int16_t, 8>& p);   control("path", setPath)
-template <typename T, size_t N>
-constexpr Decl<T, kControl, void (*)(const ::hubwire::List<T, N>&)> control(const char* name,
-                                                                           void (*fn)(const ::hubwire::List<T, N>&)) {
-  return checkValue<T, 1 + N * sizeof(T)>(),
-         Decl<T, kControl, void (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N,
-                                                                    kVoid, kWritable, fn, &callListVoid< ::hubwire::List<T, N> >);
-}
-template <typename T, size_t N>
-constexpr Decl<T, kControl, bool (*)(const ::hubwire::List<T, N>&)> control(const char* name,
-                                                                           bool (*fn)(const ::hubwire::List<T, N>&)) {
-  return checkValue<T, 1 + N * sizeof(T)>(),
-         Decl<T, kControl, bool (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N,
-                                                                    kVoid, kWritable, fn, &callListChecked< ::hubwire::List<T, N> >);
 }
 
 /// A callable action: the hub calls fn with an argument (or none) and gets its return value.
@@ -388,46 +362,6 @@ constexpr Decl<NotNumeric, kAction, R (*)()> action(const char* name, R (*fn)())
 }
 constexpr Decl<NotNumeric, kAction> action(const char* name, void (*fn)()) {
   return Decl<NotNumeric, kAction>(name, nullptr, nullptr, kVoid, 0, kVoid, kCallable, fn, &callPlain);
-}
-
-/// An action taking a List (list.h).
-///   uint8_t sum(const hubwire::List<uint8_t, 16>& v);   action("sum", sum)
-template <typename R, typename T, size_t N>
-constexpr Decl<T, kAction, R (*)(const ::hubwire::List<T, N>&)> action(const char* name, R (*fn)(const ::hubwire::List<T, N>&)) {
-  return checkValue<T, 1 + N * sizeof(T)>(), checkReturn<R>(),
-         Decl<T, kAction, R (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N,
-                                                                TypeOf<R>::code, kCallable, fn, &callListRet<R, ::hubwire::List<T, N> >);
-}
-template <typename T, size_t N>
-constexpr Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)> action(const char* name,
-                                                                         void (*fn)(const ::hubwire::List<T, N>&)) {
-  return checkValue<T, 1 + N * sizeof(T)>(),
-         Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)>(name, nullptr, nullptr, listOf(TypeOf<T>::code), (uint8_t)N, kVoid,
-                                                                   kCallable, fn, &callListVoid< ::hubwire::List<T, N> >);
-}
-
-/// An action returning a List (list.h), whole in one answer: 1 + N elements' bytes at most
-/// HUBWIRE_MAX_RETURN.
-///   hubwire::List<uint8_t, 3> pins(uint8_t bank);   action("pins", pins)
-template <typename R, size_t N>
-constexpr bool checkListReturn() {
-  static_assert(TypeOf<R>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
-  static_assert(1 + N * sizeof(R) <= HUBWIRE_MAX_RETURN, "returned List larger than HUBWIRE_MAX_RETURN: raise it");
-  return true;
-}
-template <typename R, size_t N, typename A>
-constexpr Decl<A, kAction, ::hubwire::List<R, N> (*)(A)> action(const char* name, ::hubwire::List<R, N> (*fn)(A)) {
-  return checkValue<A, sizeof(A)>(), checkListReturn<R, N>(),
-         Decl<A, kAction, ::hubwire::List<R, N> (*)(A)>(name, nullptr, nullptr, TypeOf<A>::code, 0, listOf(TypeOf<R>::code),
-                                                        kCallable, fn, &callRetList< ::hubwire::List<R, N>, A>, 0,
-                                                        (uint8_t)N);
-}
-template <typename R, size_t N>
-constexpr Decl<NotNumeric, kAction, ::hubwire::List<R, N> (*)()> action(const char* name, ::hubwire::List<R, N> (*fn)()) {
-  return checkListReturn<R, N>(),
-         Decl<NotNumeric, kAction, ::hubwire::List<R, N> (*)()>(name, nullptr, nullptr, kVoid, 0, listOf(TypeOf<R>::code),
-                                                               kCallable, fn, &callNoArgList< ::hubwire::List<R, N> >, 0,
-                                                               (uint8_t)N);
 }
 
 /// An event the sketch emits with emit(); the hub is told exactly once.
