@@ -3,8 +3,6 @@ decodes as pinned, and the hub's session answers the device frames of the vector
 hub frames of the vectors (a scripted device sends them with their seq)."""
 from __future__ import annotations
 
-import json
-import pathlib
 import struct
 import time
 from typing import Any, Dict, List
@@ -14,13 +12,12 @@ import pytest
 import hubwire
 from hubwire import HubChannels
 from hubwire.wire import messages as m
-from hubwire.wire.frame import FrameDecoder, encode_frame
+from hubwire.wire.frame import encode_frame
 
 from hubdevice import HubDevice
+from framevectors import check_frame, load
 
-VECTORS = pathlib.Path(__file__).resolve().parents[2] / "test" / "vectors" / "both" / "frames.json"
-DOC = json.loads(VECTORS.read_text())
-BY_NAME: Dict[str, Dict[str, Any]] = {v["name"]: v for v in DOC["vectors"]}
+DOC, BY_NAME = load("both")
 DEVICE = (b'{"p":1,"n":"thermo","ch":[],"hub":[{"id":1,"n":"setpoint","a":"r","t":"f32"},'
           b'{"id":2,"n":"report","a":"w","t":"u16"},{"id":3,"n":"dock","a":"c","t":"f32","rt":"bool"},'
           b'{"id":4,"n":"mode","a":"e","t":"u8"}]}')
@@ -28,12 +25,7 @@ DEVICE = (b'{"p":1,"n":"thermo","ch":[],"hub":[{"id":1,"n":"setpoint","a":"r","t
 
 @pytest.mark.parametrize("v", DOC["vectors"], ids=[v["name"] for v in DOC["vectors"]])
 def test_frame_codec(v: Dict[str, Any]) -> None:
-    payload = bytes.fromhex(v["payload"])
-    wire = encode_frame(v["type"], v["seq"], v["id"], payload)
-    assert wire.hex() == v["wire"]
-    (f,) = FrameDecoder(255).feed(wire)
-    assert (f.type, f.seq, f.id, f.payload) == (v["type"], v["seq"], v["id"], payload)
-    assert m.describe(f, v["message"]["kind"]) == v["message"]
+    check_frame(v, kind=v["message"]["kind"])
 
 
 def vector_hub(refuse: List[int]) -> HubChannels:

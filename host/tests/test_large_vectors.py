@@ -4,7 +4,6 @@ reassembler puts the pinned fragments back together (or drops them) as the excha
 from __future__ import annotations
 
 import json
-import pathlib
 from typing import Any, Dict, List
 
 import pytest
@@ -14,10 +13,9 @@ from hubwire.errors import InvalidValue
 from hubwire.session.fragments import Reassembler, encode_message
 from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
+from framevectors import check_frame, load
 
-VECTORS = pathlib.Path(__file__).resolve().parents[2] / "test" / "vectors" / "large" / "frames.json"
-DOC = json.loads(VECTORS.read_text())
-BY_NAME: Dict[str, Dict[str, Any]] = {v["name"]: v for v in DOC["vectors"]}
+DOC, BY_NAME = load("large")
 BIG = bytes.fromhex(DOC["big"])
 LIMIT = DOC["max_payload"]
 
@@ -36,13 +34,7 @@ def starting(prefix: str) -> List[str]:
 
 @pytest.mark.parametrize("v", DOC["vectors"], ids=[v["name"] for v in DOC["vectors"]])
 def test_frame_codec(v: Dict[str, Any]) -> None:
-    payload = bytes.fromhex(v["payload"])
-    assert len(payload) <= LIMIT
-    wire = encode_frame(v["type"], v["seq"], v["id"], payload)
-    assert wire.hex() == v["wire"]
-    (f,) = FrameDecoder(LIMIT).feed(wire)
-    assert (f.type, f.seq, f.id, f.payload) == (v["type"], v["seq"], v["id"], payload)
-    assert m.describe(f) == v["message"]
+    check_frame(v, LIMIT)
 
 
 @pytest.mark.parametrize("prefix,type,seq,payload", [

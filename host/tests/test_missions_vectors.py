@@ -3,8 +3,6 @@ decodes as pinned, the scenarios name existing frames, and the hub's payload bui
 agree with the vectors byte for byte."""
 from __future__ import annotations
 
-import json
-import pathlib
 from typing import Any, Dict
 
 import pytest
@@ -13,24 +11,18 @@ import hubwire
 
 from hubwire.descriptor import parse_descriptor
 from hubwire.wire import messages as m
-from hubwire.wire.frame import FrameDecoder, encode_frame
+from hubwire.wire.frame import encode_frame
 from hubwire.wire.missions import MissionKind, MissionState, MissionUpdate, cancel_payload, start_payload
 
 from missiondevice import MissionDevice, f32, wait_for
+from framevectors import check_frame, load
 
-VECTORS = pathlib.Path(__file__).resolve().parents[2] / "test" / "vectors" / "missions" / "frames.json"
-DOC = json.loads(VECTORS.read_text())
-BY_NAME: Dict[str, Dict[str, Any]] = {v["name"]: v for v in DOC["vectors"]}
+DOC, BY_NAME = load("missions")
 
 
 @pytest.mark.parametrize("v", DOC["vectors"], ids=[v["name"] for v in DOC["vectors"]])
 def test_frame_codec(v: Dict[str, Any]) -> None:
-    payload = bytes.fromhex(v["payload"])
-    wire = encode_frame(v["type"], v["seq"], v["id"], payload)
-    assert wire.hex() == v["wire"]
-    (f,) = FrameDecoder(255).feed(wire)
-    assert (f.type, f.seq, f.id, f.payload) == (v["type"], v["seq"], v["id"], payload)
-    assert m.describe(f, v["message"]["kind"]) == v["message"]
+    check_frame(v, kind=v["message"]["kind"])
 
 
 def test_payload_builders_match() -> None:
