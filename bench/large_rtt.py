@@ -13,13 +13,14 @@ load; the ratio is taken per run. On the emulator (extras/tests/Large1K, native,
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import tempfile
 import time
 from typing import Any, Callable, Dict, List
 
-from common import BUILD, OUT, ROOT, Child, build_sketch, md_table, row, save, simuno, tmp_link
+from common import BUILD, OUT, RESULTS, ROOT, Child, build_sketch, md_table, row, save, simuno, tmp_link
 from wire_large import BIG, PROFILE, write_read
 
 import hubwire
@@ -164,6 +165,19 @@ The device's receive counters at the end (its heartbeat): a fragment lost in the
 shows as `crc` / `overflow` / `dropped` and abandons the whole message (PROTOCOL.md 12.4).
 
 {md_table(["device", "crc", "overflow", "dropped"], counters)}
+"""
+    try:
+        c18 = float(json.load(open(os.path.join(RESULTS, "rx_cycles.json")))["extra"]["cycles"]["18"])
+    except (OSError, KeyError, ValueError):
+        c18 = 0.0
+    if c18:
+        details += f"""
+A full Uno fragment is a 39-byte frame (32-byte payload). Row 2, region 18 (an `H` of that size through
+the receive path, nothing dispatched) costs {c18:,.0f} cycles = {c18 / 39:.0f} cycles per byte before the
+Arduino core's RX interrupt (not counted there); at 1,000,000 baud a byte arrives every 160 cycles (176 in
+simavr, which counts 11 bits). A single frame fits the core's 64-byte receive ring whatever the speed;
+8 fragments back to back (276 bytes) do not when the receive path is slower than the line, so one lost
+byte abandons the whole write (12.4) and every retry meets the same burst.
 """
     rows = []
     for k, name in (("simuno 115200", "115200"), ("simuno 1000000", "1 Mbaud")):
