@@ -3,7 +3,8 @@
 
 On the simulated Uno: examples/LargeValues (a 200-byte struct, 32-byte frames) rebuilt per baud rate
 with one f32 channel `trim` added (build/bench/sketches/LargeBaud<baud>, generated from the example
-so it never drifts), real-time simuno. Each round writes `trim`, writes `profile`, reads `trim`,
+so it never drifts), real-time simuno; at 1 Mbaud also with the Arduino core's receive ring at 256
+bytes instead of 64. Each round writes `trim`, writes `profile`, reads `trim`,
 reads `profile` through the public API (dev.write / dev.read), so both sizes see the same machine
 load; the ratio is taken per run. On the emulator (extras/tests/Large1K, native, no UART): the 1 KB
 `big` written and read next to a 4-byte read (`checksum`) and a one-element list write (`tail`, 5 B).
@@ -31,7 +32,12 @@ REAL_BAUD = {115200: 117647, 1000000: 1000000}  # what the AVR's UBRR produces a
 LARGE_EMULATOR = os.path.join(BUILD, "emulator", "hubwire-large-emulator")
 
 
-def large_values_at(baud: int) -> str:
+#: (label, baud, extra compiler flags): the third gives the Arduino core a 256-byte receive ring
+UNOS = [("simuno 115200", 115200, ""), ("simuno 1000000", 1000000, ""),
+        ("simuno 1000000, RX ring 256", 1000000, "-DSERIAL_RX_BUFFER_SIZE=256")]
+
+
+def large_values_at(baud: int, flags: str = "") -> str:
     src = open(os.path.join(ROOT, "examples/LargeValues/LargeValues.ino")).read()
     anchors = ("Serial.begin(115200)", "uint16_t pathWrites;", 'expose("path_writes", pathWrites));')
     assert all(a in src for a in anchors), "examples/LargeValues changed: update bench/large_rtt.py"
@@ -44,7 +50,7 @@ def large_values_at(baud: int) -> str:
     if not os.path.exists(path) or open(path).read() != text:
         with open(path, "w") as f:
             f.write(text)
-    return build_sketch(d, os.path.join(OUT, f"LargeBaud{baud}"))
+    return build_sketch(d, os.path.join(OUT, f"LargeBaud{baud}" + ("Ring256" if flags else "")), flags)
 
 
 def timed(ops: Dict[str, Callable[[int], Any]], n: int, fails: Dict[str, int],
@@ -121,12 +127,12 @@ def main() -> None:
     wire_ms = {baud: ((len(c) + len(ack)) * 10 / real * 1e3, (len(r) + len(resp)) * 10 / real * 1e3)
                for baud, real in REAL_BAUD.items()}
     runs: Dict[str, Dict[str, Any]] = {}
-    for baud in REAL_BAUD:
-        elf = large_values_at(baud)
-        link = tmp_link(f"large{baud}")
+    for label, baud, flags in UNOS:
+        elf = large_values_at(baud, flags)
+        link = tmp_link(f"large{baud}{len(runs)}")
         with simuno(elf, link):
             time.sleep(0.5)
-            runs[f"simuno {baud}"] = on_uno(link, a.n)
+            runs[label] = on_uno(link, a.n)
     link = tmp_link("large-emu")
     with Child([LARGE_EMULATOR, "--link", link], link):
         runs["emulator (no UART)"] = on_emulator(link, a.n)
@@ -144,7 +150,7 @@ def main() -> None:
             ratio = f"{med(k, op) / med(k, names[j - 1]):.1f}x" if j % 2 and v and r["ops"][names[j - 1]] else ""
             wire = ""
             if k.startswith("simuno") and op in ("write 200 B", "read 200 B"):
-                wire = f"{wire_ms[int(k.split()[1])][op.startswith('read')]:.2f}"
+                wire = f"{wire_ms[int(k.split()[1].rstrip(','))][op.startswith('read')]:.2f}"
             lines.append([k, op, wire, f"{med(k, op):.2f}" if v else "-", f"{min(v):.2f}" if v else "-", ratio,
                           r["failed"].get(op, 0)])
     counters = [[k, r["counters"].get("crc", 0), r["counters"].get("overflow", 0), r["counters"].get("dropped", 0)]
@@ -177,10 +183,12 @@ the receive path, nothing dispatched) costs {c18:,.0f} cycles = {c18 / 39:.0f} c
 Arduino core's RX interrupt (not counted there); at 1,000,000 baud a byte arrives every 160 cycles (176 in
 simavr, which counts 11 bits). A single frame fits the core's 64-byte receive ring whatever the speed;
 8 fragments back to back (276 bytes) do not when the receive path is slower than the line, so one lost
-byte abandons the whole write (12.4) and every retry meets the same burst.
+byte abandons the whole write (12.4) and every retry meets the same burst. The third Uno above is the
+same sketch built with `-DSERIAL_RX_BUFFER_SIZE=256` (the core's ring, +192 B of SRAM): the burst fits.
 """
     rows = []
-    for k, name in (("simuno 115200", "115200"), ("simuno 1000000", "1 Mbaud")):
+    for k, name in (("simuno 115200", "115200"), ("simuno 1000000", "1 Mbaud"),
+                    ("simuno 1000000, RX ring 256", "1 Mbaud, -DSERIAL_RX_BUFFER_SIZE=256")):
         r = runs[k]
         fail = r["failed"].get("write 200 B", 0)
         wtxt = (f"{med(k, 'write 200 B'):.1f} ms ({med(k, 'write 200 B') / med(k, 'write 4 B (f32)'):.1f}x)"
