@@ -192,13 +192,14 @@ same sketch built with `-DSERIAL_RX_BUFFER_SIZE=256` (the core's ring, +192 B of
         r = runs[k]
         fail = r["failed"].get("write 200 B", 0)
         wtxt = (f"{med(k, 'write 200 B'):.1f} ms ({med(k, 'write 200 B') / med(k, 'write 4 B (f32)'):.1f}x)"
-                if r["ops"]["write 200 B"] else f"write: no answer ({fail} of {fail} tries)")
+                if r["ops"]["write 200 B"] else f"no answer ({fail} of {fail} calls, each with the hub's retries)")
         rows.append(row(f"6b. 200 B write / read round trip, simulated Uno, {name}", "",
                         f"write {wtxt} / read {med(k, 'read 200 B'):.1f} ms "
                         f"({med(k, 'read 200 B') / med(k, 'read 4 B (f32)'):.1f}x); x = against a 4 B write / read",
                         None, "python bench/large_rtt.py",
                         "8 fragments each way; ratio within one run" if not fail else
-                        f"device counted crc/overflow/dropped {r['counters']}: the burst of fragments overruns the Uno"))
+                        "the device counted " + ", ".join(f"{v} {k}" for k, v in r["counters"].items())
+                        + ": the burst of 8 fragments overruns the core's 64-byte receive ring"))
     e = "emulator (no UART)"
     rows.append(row("6b. 1 KB write / read round trip, emulator (no UART)", "",
                     f"{med(e, 'write 1 KB'):.1f} / {med(e, 'read 1 KB'):.1f} ms median "
