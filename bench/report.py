@@ -15,14 +15,18 @@ import sys
 
 from common import RESULTS, ROOT, md_table, row
 
-ORDER = ["footprint", "rx_cycles", "wire_bytes", "throughput", "connect", "rtt", "many", "mqtt", "dashboard"]
+ORDER = ["footprint", "rx_cycles", "wire_bytes", "wire_large", "throughput", "connect", "rtt", "large_rtt", "missions",
+         "many", "mqtt", "dashboard"]
 SCALE = {
     "footprint": "peers: see Peers below (bash bench/peers.sh)",
     "rx_cycles": "CRC-16 bitwise 108 c/B, PROGMEM table 24 c/B, _crc_xmodem_update 34 c/B; COBS decode 13 c/B",
     "wire_bytes": "MAVLink v2 12, rosserial 8, SerialComm 11",
+    "wire_large": "ratio against the raw value size (1.00x = no overhead)",
     "throughput": "pymavlink / pySerialTransfer measured in the same run",
     "connect": "pyFirmata sleeps 5 s, pymata 4 s, rosserial 2.1 s",
     "rtt": "micro-ROS 8.8 ms at 115200",
+    "large_rtt": "the same run's 4-byte write / read; wire time of the fragments at the baud",
+    "missions": "frames: row 3b's 4 + 2N; times against the device's own clock",
     "many": "",
     "mqtt": "",
     "dashboard": "",

@@ -5,7 +5,7 @@
 #
 # Needs what `make setup` installs, plus a bench-only venv (build/bench-venv) holding pymavlink and
 # pySerialTransfer from PyPI for the comparison in row 4: created here on first use, never .venv.
-# Takes about 4-5 minutes (the dashboard row: about 1.5). A step that fails is reported as failed in RESULTS.md; the rest still run.
+# Takes about 5 minutes (the dashboard row: about 1.5). A step that fails is reported as failed in RESULTS.md; the rest still run.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 PY=.venv/bin/python
@@ -35,9 +35,12 @@ rm -rf build/bench/results
 step footprint bash bench/footprint.sh
 step rx_cycles "$PY" bench/rx_cycles.py
 step wire_bytes "$PY" bench/wire_bytes.py
+step wire_large "$PY" bench/wire_large.py
 step throughput "$BENCH_PY" bench/throughput.py
 step connect "$PY" bench/connect.py
 step rtt "$PY" bench/rtt.py
+step large_rtt "$PY" bench/large_rtt.py
+step missions "$PY" bench/missions.py
 step many "$PY" bench/many.py
 step mqtt "$PY" bench/mqtt_bridge.py
 step dashboard "$PY" bench/dashboard.py
