@@ -93,11 +93,6 @@ TEST(Vectors, Cobs) {
     Bytes out(cobsMaxEncoded(dec.size()));
     out.resize(cobsEncode(dec.data(), dec.size(), out.data()));
     EXPECT_EQ(hexOf(out), hexOf(enc)) << v["name"];
-    FakeStream s;
-    FakeClock c;
-    Port p(s, c);
-    cobsEncodeTo(dec.data(), dec.size(), p);
-    EXPECT_EQ(hexOf(s.out), hexOf(enc)) << v["name"] << " (streamed)";
     Bytes back(dec.size() + 1);
     size_t n = 0;
     ASSERT_TRUE(cobsDecode(enc.data(), enc.size(), back.data(), back.size(), &n)) << v["name"];
@@ -178,7 +173,7 @@ TEST(Vectors, Frames) {
     Bytes payload = hex(v["payload"]);
     uint8_t type = v["type"], seq = v["seq"], id = v["id"];
     // Built with the device's writer, byte for byte.
-    uint8_t buf[HUBWIRE_RAW_FRAME_SIZE(255)];
+    uint8_t buf[HUBWIRE_SEND_FRAME_SIZE(255)];
     FrameWriter w(buf);
     memcpy(w.payload(), payload.data(), payload.size());
     FakeStream s;

@@ -20,8 +20,7 @@ __attribute__((always_inline)) static inline bool hubHook(Session& s, bool frame
 Session::Session(Port& port)
     : SessionState(),  // all zero
       port_(port),
-      rx_(frameBuf_, sizeof(frameBuf_)),
-      tx_(frameBuf_) {
+      rx_(frameBuf_ + 1, sizeof(frameBuf_) - 2) {  // the writer's code byte and delimiter around it
   peerMax_ = kHelloSize;  // all a hub not yet heard is sure to accept (PROTOCOL.md 3.1)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
@@ -158,7 +157,7 @@ void Session::handle(const Frame& f) {
   bool duplicate = f.type == kMsgControl && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ &&
                    f.id == lastTxnId_;
   if (duplicate) {  // a retried control: answer again, do not apply twice
-    memcpy(tx_.payload(), replyData_, replyLen_);
+    memcpy(tx().payload(), replyData_, replyLen_);
     reply(replyType_, f, replyLen_);
     return;
   }
@@ -251,7 +250,7 @@ void Session::onChunk(const Frame& f) {
   uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
   if (total - offset < n) n = (uint16_t)(total - offset);
-  uint8_t* out = tx_.payload();
+  uint8_t* out = tx().payload();
   storeU16(out, offset);
   storeU16(out + 2, total);
   fromFlash(out + kChunkHeader, table_.json + offset, n);
@@ -263,14 +262,14 @@ void Session::onRequest(const Frame& f) {
   if (!find(f.id, ch)) {
     // Id 0 is the link itself: reading it asks for the board id (at most 16 bytes, which every
     // hub accepts), where the board has one.
-    uint8_t n = f.id == 0 && f.len == 0 ? portBoardId(port_, tx_.payload()) : 0;
+    uint8_t n = f.id == 0 && f.len == 0 ? portBoardId(port_, tx().payload()) : 0;
     if (n) return reply(kMsgResponse, f, n);
     return sendNak(f, kErrUnknownChannel);
   }
   if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
   // Not sent at all when the hub could not take it (its hello said how much it accepts).
   if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
-  reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
+  reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx().payload()));
 }
 
 void Session::onControl(const Frame& f) {
@@ -293,7 +292,7 @@ void Session::onControl(const Frame& f) {
     }
     if (code == kOk) {
       if (uses(kUsesCalls) && ch.thunk) {
-        uint8_t* ret = tx_.payload();
+        uint8_t* ret = tx().payload();
         if (!ch.thunk(ch.call, f.payload, ret)) {
           code = kErrRejected;
         } else if (uses(kUsesReturns) && ch.ret != kVoid) {
@@ -309,12 +308,12 @@ void Session::onControl(const Frame& f) {
   if (code != kOk) {
     type = kMsgNak;
     len = 1;
-    tx_.payload()[0] = code;
+    tx().payload()[0] = code;
   }
   if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
-  memcpy(replyData_, tx_.payload(), len);
+  memcpy(replyData_, tx().payload(), len);
   reply(type, f, len);
 }
 
@@ -329,7 +328,7 @@ void Session::onSubscribe(const Frame& f) {
 #else
   if (interval != 0) return sendNak(f, kErrBusy);
 #endif
-  storeU16(tx_.payload(), interval);
+  storeU16(tx().payload(), interval);
   reply(kMsgAck, f, 2);
 }
 
@@ -343,11 +342,11 @@ void Session::sendSamples(uint16_t now) {
       s.id = 0;
       continue;
     }
-    uint8_t* out = tx_.payload();
+    uint8_t* out = tx().payload();
     uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
     if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
     storeU16(out, s.since(now));
-    tx_.send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
+    tx().send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
     s.sent(now);
   }
 #else
@@ -362,13 +361,13 @@ bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
 
 void Session::sendEvent(uint16_t now) {
   const EventQueue::Entry& e = events_.send(now);
-  memcpy(tx_.payload(), e.data, e.len);
-  tx_.send(port_, kMsgEvent, events_.seq(), e.id, e.len);
+  memcpy(tx().payload(), e.data, e.len);
+  tx().send(port_, kMsgEvent, events_.seq(), e.id, e.len);
 }
 
 void Session::sendHello(bool isReply) {
   if (!nonceDrawn_) drawNonce(0);
-  uint8_t* p = tx_.payload();
+  uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
   storeU32(p + 2, nonce_);
@@ -379,27 +378,27 @@ void Session::sendHello(bool isReply) {
   // The descriptor's digest (just before the JSON in flash), sent to a hub that accepts it: one
   // that accepts only 16 bytes gets the hello it knows.
   if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd) fromFlash(p + kHelloSize, table_.json - kDigestSize, kDigestSize);
-  tx_.send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
+  tx().send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
 }
 
 void Session::sendHeartbeat(uint16_t now) {
-  uint8_t* p = tx_.payload();
+  uint8_t* p = tx().payload();
   ++beatCounter_;
   storeU16(p, beatCounter_);
   storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastSent_) : 0);
   storeU16(p + 4, rx_.counters.crc);
   storeU16(p + 6, rx_.counters.overflow);
   storeU16(p + 8, rx_.counters.dropped);
-  tx_.send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
+  tx().send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
   lastSent_ = now;
   beatSent_ = true;
 }
 
 void Session::sendNak(const Frame& f, uint8_t code) {
-  tx_.payload()[0] = code;
+  tx().payload()[0] = code;
   reply(kMsgNak, f, 1);
 }
 
-void Session::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(port_, type, f.seq, f.id, len); }
+void Session::reply(uint8_t type, const Frame& f, uint8_t len) { tx().send(port_, type, f.seq, f.id, len); }
 
 }  // namespace hubwire

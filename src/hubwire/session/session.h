@@ -52,8 +52,9 @@ struct SessionState {
   bool lastTxnControl_ : 1;  // ... which was a control
 
   // One buffer receives and sends frames: an answer is built where its question was (handlers
-  // read the question first), and frames of our own wait until no frame is arriving.
-  uint8_t frameBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+  // read the question first), and frames of our own wait until no frame is arriving. The writer
+  // encodes in place from its first byte on, the receiver uses the rest (frame.h).
+  uint8_t frameBuf_[HUBWIRE_SEND_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
 
   // The sketch's channels (all in flash).
   ChannelTable table_;
@@ -240,7 +241,8 @@ class Session : private SessionState {
 
   Port& port_;
   FrameReceiver rx_;
-  FrameWriter tx_;
+  // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.
+  FrameWriter tx() { return FrameWriter(frameBuf_); }
 };
 
 }  // namespace hubwire
