@@ -19,8 +19,8 @@ __attribute__((always_inline)) static inline bool hubHook(Session& s, bool frame
 
 Session::Session(Port& port)
     : SessionState(),  // all zero
-      port_(port),
-      rx_(frameBuf_ + 1, sizeof(frameBuf_) - 2) {  // the writer's code byte and delimiter around it
+      port_(port) {
+  rx_.attach(frameBuf_ + 1, sizeof(frameBuf_) - 2);  // the writer's code byte and delimiter around it
   peerMax_ = kHelloSize;  // all a hub not yet heard is sure to accept (PROTOCOL.md 3.1)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }

@@ -81,6 +81,7 @@ struct SessionState {
 #if HUBWIRE_MAX_STREAMS > 0
   Streams streams_;  // the hub's subscriptions
 #endif
+  FrameReceiver rx_;  // zeroed with the rest; the constructor attaches frameBuf_
 };
 
 class Session : private SessionState {
@@ -240,7 +241,6 @@ class Session : private SessionState {
   uint8_t maxOut() const { return peerMax_ < HUBWIRE_MAX_PAYLOAD ? peerMax_ : HUBWIRE_MAX_PAYLOAD; }
 
   Port& port_;
-  FrameReceiver rx_;
   // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.
   FrameWriter tx() { return FrameWriter(frameBuf_); }
 };

@@ -41,6 +41,15 @@ class FrameReceiver {
  public:
   // buffer holds capacity raw bytes: HUBWIRE_RAW_FRAME_SIZE(largest accepted payload).
   FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), end_(buffer + capacity) { reset(); }
+  // A receiver without a buffer yet: value-initialised (FrameReceiver r{} or as a member of a
+  // value-initialised whole) it is all zero, and attach() then sets only its pointers.
+  FrameReceiver() = default;
+
+  // Gives a zeroed receiver its buffer.
+  void attach(uint8_t* buffer, uint16_t capacity) {
+    buf_ = at_ = buffer;
+    end_ = buffer + capacity;
+  }
 
   // Takes one byte; true when it completed a valid frame, which frame() then describes.
   // Most bytes are data inside a COBS block that fit the buffer: that case is a store and a count,
