@@ -22,21 +22,19 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
     uint16_t len = (uint16_t)(at_ - buf_);
     reset();
     if (!wasStarted) return false;  // lone delimiter: a sender flushing line noise
+    uint16_t* bad;  // the counter of the reason it is dropped: one increment for all of them
     if (overflowed) {
-      ++counters.overflow;
-      return false;
+      bad = &counters.overflow;
+    } else if (!complete || len < kFrameOverhead) {
+      bad = &counters.dropped;
+    } else if (crc16(buf_, len - 2) != loadU16(buf_ + len - 2)) {
+      bad = &counters.crc;
+    } else {
+      frameLen_ = (uint8_t)(len - kFrameOverhead);
+      return true;
     }
-    if (!complete || len < kFrameOverhead) {
-      ++counters.dropped;
-      return false;
-    }
-    uint16_t got = loadU16(buf_ + len - 2);
-    if (crc16(buf_, len - 2) != got) {
-      ++counters.crc;
-      return false;
-    }
-    frameLen_ = (uint8_t)(len - kFrameOverhead);
-    return true;
+    ++*bad;
+    return false;
   }
   started_ = true;
   if (beyond_ != 0) {  // a data byte past the end of the buffer, or one after it: skip to the delimiter
