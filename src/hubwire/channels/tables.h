@@ -343,11 +343,11 @@ constexpr ChannelTable table(const typename Stored<D, Decls>::JsonType& json,
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
   static_assert(sizeof(JsonAndDigest<D, Decls>) == sizeof(JsonText<D, Decls>) + kDigestSize,
                 "the JSON follows the digest without a gap");
-  return ChannelTable{json.text.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
+  return ChannelTable{json.text.head.c,
                       hashOf(Json<D, Decls>::value.text.body,
                              fnvChars(Json<D, Decls>::value.text.head.c, sizeof(Json<D, Decls>::value.text.head.c),
                                       kFnvOffset)),
-                      infos.v,
+                      (uint16_t)sizeof(JsonText<D, Decls>), infos.v,
                       D::size()};
 }
 

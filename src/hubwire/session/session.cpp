@@ -370,11 +370,12 @@ void Session::sendHello(bool isReply) {
   uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
-  storeU32(p + 2, nonce_);
+  // Multi-byte fields are copied as they are in memory: that is their wire form (config.h).
+  memcpy(p + 2, &nonce_, 4);
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
-  storeU32(p + 10, table_.hash);
-  storeU16(p + 14, table_.jsonLength);
+  static_assert(offsetof(ChannelTable, jsonLength) == offsetof(ChannelTable, hash) + 4, "hash, then length");
+  memcpy(p + 10, &table_.hash, 6);
   // The descriptor's digest (just before the JSON in flash), sent to a hub that accepts it: one
   // that accepts only 16 bytes gets the hello it knows.
   if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd) fromFlash(p + kHelloSize, table_.json - kDigestSize, kDigestSize);
@@ -386,9 +387,8 @@ void Session::sendHeartbeat(uint16_t now) {
   ++beatCounter_;
   storeU16(p, beatCounter_);
   storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastSent_) : 0);
-  storeU16(p + 4, rx_.counters.crc);
-  storeU16(p + 6, rx_.counters.overflow);
-  storeU16(p + 8, rx_.counters.dropped);
+  static_assert(sizeof(LinkCounters) == 6, "crc, overflow, dropped: the heartbeat's order");
+  memcpy(p + 4, &rx_.counters, 6);
   tx().send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
   lastSent_ = now;
   beatSent_ = true;
