@@ -22,7 +22,7 @@ namespace declare {
 struct NotNumeric {
   constexpr NotNumeric() {}
 };
-struct StructValue : NotNumeric {  // marks a struct channel: its layout text is copied to flash
+struct StructValue : NotNumeric {  // marks a struct channel: its compiled layout is kept in flash
   constexpr StructValue() {}
 };
 template <typename T>

@@ -215,11 +215,12 @@ constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32
   return hashOf(b.rest, fnvChars(b.first.c, sizeof(b.first.c), h));
 }
 
-// A struct channel's layout text, copied into flash for the session's struct codec.
+// A struct channel's layout, compiled to two bytes a field (layout.h) into flash for the session's
+// struct codec.
 template <typename D, const D* Decls, size_t I>
 struct LayoutPart {
-  static constexpr size_t length() { return cx::length(DeclAt<D, Decls, I>::decl.layout()) + 1; }
-  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.layout()[i]; }
+  static constexpr size_t length() { return compiledLayoutLength(DeclAt<D, Decls, I>::decl.layout()); }
+  static constexpr char at(size_t i) { return (char)compiledLayoutAt(DeclAt<D, Decls, I>::decl.layout(), i); }
 };
 
 template <typename T, Kind K, typename C>

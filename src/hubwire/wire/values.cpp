@@ -33,6 +33,13 @@ uint8_t alignOf(TypeCode t) {
 
 uint16_t alignUp(uint16_t v, uint8_t a) { return (uint16_t)((v + a - 1) / a * a); }
 
+bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
+  if (t != kBool) return true;
+  for (uint16_t i = 0; i < n; ++i)
+    if (p[i] > 1) return false;
+  return true;
+}
+
 }  // namespace
 
 uint8_t scalarSize(TypeCode t) {  // arithmetic, not a switch: AVR keeps switch tables in RAM
@@ -46,134 +53,30 @@ Text typeName(TypeCode t) {
   return flashText(kTypeNames + t * kNameStride);
 }
 
-bool LayoutReader::next(LayoutField& f) {
-  if (!ok || text_.at(pos_) == 0) return false;
-  f.nameStart = pos_;
-  while (text_.at(pos_) && text_.at(pos_) != ':') ++pos_;
-  f.nameLen = (uint16_t)(pos_ - f.nameStart);
-  if (text_.at(pos_) != ':' || f.nameLen == 0) return ok = false;
-  ++pos_;
-  // Match the type name against the scalar names.
-  f.code = kVoid;
-  for (uint8_t t = kBool; t <= kF64; ++t) {
-    Text name = typeName((TypeCode)t);
-    uint8_t k = 0;
-    while (name.at(k) && name.at(k) == text_.at(pos_ + k)) ++k;
-    char after = text_.at(pos_ + k);
-    if (name.at(k) == 0 && (after == 0 || after == ',' || after == '[')) {
-      f.code = (TypeCode)t;
-      pos_ = (uint16_t)(pos_ + k);
-      break;
-    }
-  }
-  if (f.code == kVoid) return ok = false;
-  f.count = 0;
-  if (text_.at(pos_) == '[') {
-    ++pos_;
-    uint16_t n = 0;
-    while (text_.at(pos_) >= '0' && text_.at(pos_) <= '9') n = (uint16_t)(n * 10 + (text_.at(pos_++) - '0'));
-    if (text_.at(pos_) != ']' || n == 0 || n > 255) return ok = false;
-    ++pos_;
-    f.count = (uint8_t)n;
-  }
-  if (text_.at(pos_) == ',') {
-    ++pos_;
-    if (text_.at(pos_) == 0) return ok = false;
-  } else if (text_.at(pos_) != 0) {
-    return ok = false;
-  }
-  return true;
-}
-
-namespace {
-
-uint16_t fieldBytes(const LayoutField& f) { return (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1)); }
-
-uint16_t structWireSize(Text layout) {
-  uint16_t n = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) n = (uint16_t)(n + fieldBytes(f));
-  return n;
-}
-
-uint16_t structMemSize(Text layout) {
-  uint16_t n = 0;
-  uint8_t maxAlign = 1;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint8_t a = alignOf(f.code);
-    if (a > maxAlign) maxAlign = a;
-    n = (uint16_t)(alignUp(n, a) + fieldBytes(f));
-  }
-  return r.ok ? alignUp(n, maxAlign) : 0;  // 0 also for an empty layout
-}
-
-// Copies field by field between the packed wire form and the aligned memory form.
-uint16_t structCopy(Text layout, uint8_t* mem, uint8_t* wire, bool toWire) {
+// One walk over the fields serves every operation: the wire form is packed, the memory form has
+// each field at its alignment. Ifs rather than a switch: AVR keeps switch tables in RAM.
+uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len) {
+  if (op == kStructCheck && len != structCodec(kStructWireSize, layout, nullptr, nullptr, 0)) return kErrBadLength;
+  const uint8_t* from = (const uint8_t*)in;
+  uint8_t* to = (uint8_t*)out;
   uint16_t memOff = 0, wireOff = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = fieldBytes(f);
-    memOff = alignUp(memOff, alignOf(f.code));
-    if (toWire) {
-      memcpy(wire + wireOff, mem + memOff, n);
-    } else {
-      memcpy(mem + memOff, wire + wireOff, n);
-    }
+  uint8_t maxAlign = 1;
+  for (uint16_t i = 0;; i = (uint16_t)(i + 2)) {
+    TypeCode code = (TypeCode)layout.at(i);
+    if (code == kVoid) break;
+    uint16_t n = (uint16_t)(scalarSize(code) * (uint8_t)layout.at((uint16_t)(i + 1)));
+    uint8_t a = alignOf(code);
+    if (a > maxAlign) maxAlign = a;
+    memOff = alignUp(memOff, a);
+    if (op == kStructToWire) memcpy(to + wireOff, from + memOff, n);
+    if (op == kStructFromWire) memcpy(to + memOff, from + wireOff, n);
+    if (op == kStructCheck && !boolsValid(code, from + wireOff, n)) return kErrBadValue;
     memOff = (uint16_t)(memOff + n);
     wireOff = (uint16_t)(wireOff + n);
   }
-  return wireOff;
-}
-
-uint16_t structToWire(Text layout, const void* mem, uint8_t* wire) {
-  return structCopy(layout, (uint8_t*)mem, wire, true);
-}
-
-void structFromWire(Text layout, const uint8_t* wire, void* mem) {
-  structCopy(layout, (uint8_t*)mem, (uint8_t*)wire, false);
-}
-
-bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
-  if (t != kBool) return true;
-  for (uint16_t i = 0; i < n; ++i)
-    if (p[i] > 1) return false;
-  return true;
-}
-
-ErrorCode structCheck(Text layout, const uint8_t* wire, uint16_t len) {
-  if (len != structWireSize(layout)) return kErrBadLength;
-  uint16_t off = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = fieldBytes(f);
-    if (!boolsValid(f.code, wire + off, n)) return kErrBadValue;
-    off = (uint16_t)(off + n);
-  }
-  return kOk;
-}
-
-}  // namespace
-
-uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len) {
-  switch (op) {
-    case kStructWireSize:
-      return structWireSize(layout);
-    case kStructMemSize:
-      return structMemSize(layout);
-    case kStructToWire:
-      return structToWire(layout, in, (uint8_t*)out);
-    case kStructCheck:
-      return structCheck(layout, (const uint8_t*)in, len);
-    case kStructFromWire:
-      structFromWire(layout, (const uint8_t*)in, out);
-      return 0;
-  }
-  return 0;
+  if (op == kStructMemSize) return alignUp(memOff, maxAlign);
+  if (op == kStructCheck) return kOk;
+  return wireOff;  // kStructWireSize, kStructToWire; ignored for kStructFromWire
 }
 
 uint16_t ValueType::wireSize() const {
