@@ -70,7 +70,10 @@
 #if defined(HUBWIRE_ALL_FEATURES)
 #define HUBWIRE_SKETCH_FEATURES(f)
 #else
-#define HUBWIRE_SKETCH_FEATURES(f) const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;
+#define HUBWIRE_SKETCH_FEATURES(f)                                                                 \
+  const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;                                       \
+  const ::hubwire::StructCodec hubwire::sketchStructCodec HUBWIRE_RODATA =                         \
+      ((f) & ::hubwire::kUsesStructs) ? &::hubwire::structCodec : nullptr;
 #endif
 
 #endif

@@ -245,7 +245,6 @@ template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((typena
 struct LayoutStore {
   constexpr LayoutStore() {}
   constexpr const char* layout() const { return nullptr; }
-  static constexpr StructCodec codec() { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
 struct LayoutStore<D, Decls, I, true> {
@@ -254,7 +253,6 @@ struct LayoutStore<D, Decls, I, true> {
                 "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
   constexpr LayoutStore() : text(Chars<LayoutPart<D, Decls, I> >::make()) {}
   constexpr const char* layout() const { return text.c; }
-  static constexpr StructCodec codec() { return &structCodec; }
   Chars<LayoutPart<D, Decls, I> > text;
 };
 template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.hasCall()>
@@ -297,7 +295,7 @@ struct Extras<D, Decls, cx::Seq<I, R...> > : Extra<D, Decls, I>, Extras<D, Decls
 template <typename D, const D* Decls, size_t I>
 struct InfoOf : Checked<D, Decls, I> {
   static constexpr ChannelInfo make(const Extra<D, Decls, I>& e) {
-    return DeclAt<D, Decls, I>::decl.info(e.layout(), LayoutStore<D, Decls, I>::codec(), e.call(), e.limits());
+    return DeclAt<D, Decls, I>::decl.info(e.layout(), e.call(), e.limits());
   }
 };
 

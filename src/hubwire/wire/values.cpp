@@ -55,8 +55,10 @@ Text typeName(TypeCode t) {
 
 // One walk over the fields serves every operation: the wire form is packed, the memory form has
 // each field at its alignment. Ifs rather than a switch: AVR keeps switch tables in RAM.
-uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len) {
-  if (op == kStructCheck && len != structCodec(kStructWireSize, layout, nullptr, nullptr, 0)) return kErrBadLength;
+uint16_t structCodec(StructOp op, const char* compiled, const void* in, void* out, uint16_t len) {
+  // A value of the wrong length is refused as such, whatever its bytes.
+  if (op == kStructCheck && len != structCodec(kStructWireSize, compiled, nullptr, nullptr, 0)) return kErrBadLength;
+  Text layout = flashText(compiled);
   const uint8_t* from = (const uint8_t*)in;
   uint8_t* to = (uint8_t*)out;
   uint16_t memOff = 0, wireOff = 0;
@@ -81,13 +83,13 @@ uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16
 
 uint16_t ValueType::wireSize() const {
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(1 + count);
-  if (uses(kUsesStructs) && code == kStruct) return structs(kStructWireSize, layout, nullptr, nullptr, 0);
+  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructWireSize, layout, nullptr, nullptr, 0);
   return (uint16_t)(scalarSize(code) * (count ? count : 1));
 }
 
 uint16_t ValueType::memSize() const {
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
-  if (uses(kUsesStructs) && code == kStruct) return structs(kStructMemSize, layout, nullptr, nullptr, 0);
+  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructMemSize, layout, nullptr, nullptr, 0);
   return wireSize();
 }
 
@@ -100,7 +102,7 @@ uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
     memcpy(wire + 1, m, n);
     return (uint16_t)(n + 1);
   }
-  if (uses(kUsesStructs) && code == kStruct) return structs(kStructToWire, layout, mem, wire, 0);
+  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructToWire, layout, mem, wire, 0);
   uint16_t n = wireSize();
   memcpy(wire, m, n);
   return n;
@@ -112,7 +114,7 @@ ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
     if (wire[0] > count) return kErrBadValue;
     return len == 1u + wire[0] ? kOk : kErrBadLength;
   }
-  if (uses(kUsesStructs) && code == kStruct) return (ErrorCode)structs(kStructCheck, layout, wire, nullptr, len);
+  if (uses(kUsesStructs) && code == kStruct) return (ErrorCode)sketchStructCodec(kStructCheck, layout, wire, nullptr, len);
   if (len != wireSize()) return kErrBadLength;
   return boolsValid(code, wire, len) ? kOk : kErrBadValue;
 }
@@ -123,7 +125,7 @@ void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
     memcpy(m, wire + 1, wire[0]);
     m[wire[0]] = 0;
   } else if (uses(kUsesStructs) && code == kStruct) {
-    structs(kStructFromWire, layout, wire, mem, len);
+    sketchStructCodec(kStructFromWire, layout, wire, mem, len);
   } else {
     memcpy(m, wire, len);
   }
