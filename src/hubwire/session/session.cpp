@@ -197,7 +197,7 @@ void Session::onHello(const Frame& f) {
   bool fromHub = version == kProtocolVersion && !(flags & kHelloDevice);
   // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap. Known
   // before the answer, which carries the digest only if this hub accepts it.
-  if (fromHub) peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
+  if (fromHub) peerMax_ = (uint8_t)(max > HUBWIRE_MAX_PAYLOAD ? HUBWIRE_MAX_PAYLOAD : max < kHelloSize ? kHelloSize : max);
   if (!(flags & kHelloReply)) sendHello(true);
   if (!fromHub) return;  // the hub reports the mismatch
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);

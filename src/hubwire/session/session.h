@@ -61,7 +61,7 @@ struct SessionState {
 
   // Session.
   uint32_t nonce_, hubNonce_;  // nonce_ holds begin()'s seed until it is drawn
-  uint8_t peerMax_;
+  uint8_t peerMax_;  // the longest payload we send: the hub's limit, at most HUBWIRE_MAX_PAYLOAD
   // Times are the low 16 bits of millis(): every interval here stays below 65 s, so differences
   // are exact as long as update() runs at least that often.
   uint16_t lostAfterMs_;  // the hub's heartbeat interval x HUBWIRE_LOST_AFTER_BEATS
@@ -238,7 +238,7 @@ class Session : private SessionState {
   void sendSamples(uint16_t now);
   void sendNak(const Frame& f, uint8_t code);
   void reply(uint8_t type, const Frame& f, uint8_t len);
-  uint8_t maxOut() const { return peerMax_ < HUBWIRE_MAX_PAYLOAD ? peerMax_ : HUBWIRE_MAX_PAYLOAD; }
+  uint8_t maxOut() const { return peerMax_; }
 
   Port& port_;
   // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.
