@@ -129,16 +129,14 @@ void Session::handle(const Frame& f) {
   lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
-      onHello(f);
-      return;
+      return onHello(f);
     case kMsgHeartbeat:
-      if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
-      else hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
+      if (!linked_) return sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
     case kMsgNak:
-      onAck(f, f.type == kMsgNak);
-      return;
+      return onAck(f, f.type == kMsgNak);
     case kMsgChunk:
     case kMsgRequest:
     case kMsgControl:
@@ -147,37 +145,28 @@ void Session::handle(const Frame& f) {
     default:
       if (hubHook(*this, true)) return;  // hub events, answers to the device's requests
       ++rx_.counters.dropped;
-      sendNak(f, kErrUnknownType);
-      return;
+      return sendNak(f, kErrUnknownType);
   }
-  if (!linked_) {
-    sendNak(f, kErrNotLinked);
-    return;
-  }
-  bool duplicate = f.type == kMsgControl && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ &&
-                   f.id == lastTxnId_;
-  if (duplicate) {  // a retried control: answer again, do not apply twice
+  if (!linked_) return sendNak(f, kErrNotLinked);
+  bool control = f.type == kMsgControl;
+  if (control && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
+    // a retried control: answer again, do not apply twice
     memcpy(tx().payload(), replyData_, replyLen_);
-    reply(replyType_, f, replyLen_);
-    return;
+    return reply(replyType_, f, replyLen_);
   }
   lastTxnValid_ = true;
-  lastTxnControl_ = f.type == kMsgControl;
+  lastTxnControl_ = control;
   lastTxnSeq_ = f.seq;
   lastTxnId_ = f.id;
   switch (f.type) {
-    case kMsgChunk:
-      onChunk(f);
-      break;
-    case kMsgRequest:
-      onRequest(f);
-      break;
     case kMsgControl:
-      onControl(f);
-      break;
+      return onControl(f);
+    case kMsgRequest:
+      return onRequest(f);
+    case kMsgChunk:
+      return onChunk(f);
     default:
-      onSubscribe(f);
-      break;
+      return onSubscribe(f);
   }
 }
 
