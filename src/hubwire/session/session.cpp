@@ -239,8 +239,7 @@ void Session::onChunk(const Frame& f) {
   uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
   if (total - offset < n) n = (uint16_t)(total - offset);
-  uint8_t* out = tx().payload();
-  storeU16(out, offset);
+  uint8_t* out = tx().payload();  // where the request is: its offset is already the answer's
   storeU16(out + 2, total);
   fromFlash(out + kChunkHeader, table_.json + offset, n);
   reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
