@@ -109,10 +109,14 @@ void Session::drawNonce(uint32_t hubNonce) {
 void Session::update() {
   if (!started_) return;
   uint8_t i = 0;
+  uint16_t start = ms();  // when the frames read below are taken to have come
   for (; i < kMaxBytesPerUpdate; ++i) {
     int c = portRead(port_);
     if (c < 0) break;
-    if (rx_.feed((uint8_t)c)) handle(rx_.frame());
+    if (rx_.feed((uint8_t)c)) {
+      lastRx_ = start;
+      handle(rx_.frame());
+    }
   }
   uint16_t now = ms();
   if (i) lastByte_ = now;
@@ -140,7 +144,6 @@ void Session::update() {
 }
 
 void Session::handle(const Frame& f) {
-  lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
       return onHello(f);
@@ -272,10 +275,11 @@ void Session::onRequest(const Frame& f) {
     return sendNak(f, kErrUnknownChannel);
   }
   if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
-  if (HubwireLarge<true, void>::send && f.len == 0)  // a value that may not fit one frame (fragments.cpp)
+  // Not sent at all when the hub could not take it (its hello said how much it accepts), unless
+  // it may go as fragments (fragments.cpp).
+  if (f.len != 0 || (!HubwireLarge<true, void>::send && ch.type.wireSize() > maxOut())) return sendNak(f, kErrBadLength);
+  if (HubwireLarge<true, void>::send)
     return (void)HubwireLarge<true, void>::send(*this, kMsgResponse, f.seq, f.id, ch, nullptr, 0, false);
-  // Not sent at all when the hub could not take it (its hello said how much it accepts).
-  if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
   reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx().payload()));
 }
 
