@@ -340,7 +340,8 @@ void Session::onSubscribe(const Frame& f) {
     return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
-  if (!streams_.subscribe(f.id, interval, ms())) return sendNak(f, kErrBusy);
+  // Timed by update()'s clock read, as the frame is: the first sample's time since is from then.
+  if (!streams_.subscribe(f.id, interval, lastRx_)) return sendNak(f, kErrBusy);
 #else
   if (interval != 0) return sendNak(f, kErrBusy);
 #endif
