@@ -34,7 +34,7 @@ TEST(Dsl, ExposeAndItsOptions) {
                          .describe("wheel speed").onChange(changed);
   EXPECT_EQ(json(d, 1), R"({"id":1,"n":"speed","a":"rws","t":"f32","u":"m/s","min":-1,"max":1,"fs":0,"d":"wheel speed"})");
   EXPECT_EQ(json(d, 2).substr(0, 8), R"(,{"id":2)");  // later channels follow a comma
-  ChannelInfo info = d.info(nullptr, nullptr, nullptr, nullptr);
+  ChannelInfo info = d.info(nullptr, nullptr, nullptr);
   EXPECT_EQ(info.data, &speed);
   EXPECT_EQ(info.access, kReadable | kWritable | kStreamable);
   EXPECT_EQ(info.flags, kHasRange | kHasFailsafe);
@@ -66,13 +66,13 @@ TEST(Dsl, ControlsActionsAndEvents) {
   EXPECT_EQ(json(event("alarm", alarm), 1), R"({"id":1,"n":"alarm","a":"e","t":"u16"})");
   // The thunk calls the function with the argument's bytes and writes the result's.
   constexpr auto a = action("twice", twice);
-  ChannelInfo info = a.info(nullptr, nullptr, nullptr, nullptr);
+  ChannelInfo info = a.info(nullptr, nullptr, nullptr);
   int32_t (*fn)(int16_t) = a.call();
   int16_t arg = 21;
   int32_t ret = 0;
   ASSERT_TRUE(info.thunk(&fn, (const uint8_t*)&arg, (uint8_t*)&ret));
   EXPECT_EQ(ret, 42);
-  EXPECT_EQ(event("alarm", alarm).info(nullptr, nullptr, nullptr, nullptr).data, &alarm.id);
+  EXPECT_EQ(event("alarm", alarm).info(nullptr, nullptr, nullptr).data, &alarm.id);
 }
 
 TEST(Dsl, ValuesThatDoNotFitAndRangesOutOfOrderAreMarked) {
@@ -91,7 +91,7 @@ TEST(Dsl, WhetherAFunctionIsCalledIsKnownFromTheDeclaration) {
   EXPECT_TRUE(action("twice", twice).hasCall());
   EXPECT_FALSE(event("alarm", alarm).hasCall());
   // The marker stays out of the record the session reads.
-  EXPECT_EQ(expose("level", level).onChange(changed).info(nullptr, nullptr, nullptr, nullptr).flags, 0);
+  EXPECT_EQ(expose("level", level).onChange(changed).info(nullptr, nullptr, nullptr).flags, 0);
 }
 
 TEST(Dsl, DeviceNameAndTheList) {

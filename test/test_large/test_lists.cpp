@@ -106,7 +106,7 @@ TEST_F(Lists, AnActionReturnsAListWithItsCountAndARetryIsAnsweredFromMemory) {
 }
 
 TEST(ListCodec, MemoryAndWireForms) {
-  ValueType t{listOf(kU32), 5, Text(), nullptr};
+  ValueType t{listOf(kU32), 5, nullptr};
   EXPECT_EQ(t.wireSize(), 21);
   EXPECT_EQ(t.memSize(), sizeof(List<uint32_t, 5>));
   List<uint32_t, 5> l{};
@@ -132,7 +132,7 @@ TEST(ListCodec, MemoryAndWireForms) {
 }
 
 TEST(ListCodec, ChecksInOrder) {
-  ValueType t{listOf(kI16), 3, Text(), nullptr};
+  ValueType t{listOf(kI16), 3, nullptr};
   uint8_t w[16] = {0};
   EXPECT_EQ(t.check(w, 0), kErrBadLength);
   w[0] = 4;
@@ -142,7 +142,7 @@ TEST(ListCodec, ChecksInOrder) {
   EXPECT_EQ(t.check(w, 4), kErrBadLength);
   EXPECT_EQ(t.check(w, 6), kErrBadLength);
   EXPECT_EQ(t.check(w, 5), kOk);
-  ValueType b{listOf(kBool), 3, Text(), nullptr};
+  ValueType b{listOf(kBool), 3, nullptr};
   uint8_t bw[] = {3, 1, 0, 2};
   EXPECT_EQ(b.check(bw, 4), kErrBadValue);
   bw[3] = 1;
@@ -157,14 +157,16 @@ TEST(WireRange, EveryWindowMatchesTheWholeValue) {
     uint16_t c[3];
     bool d;
   } p = {0xA1, 0xB2B3B4B5, {0xC1C2, 0xC3C4, 0xC5C6}, true};
-  ValueType s{kStruct, 0, Text("a:u8,b:u32,c:u16[3],d:bool"), structCodec};
+  // "a:u8,b:u32,c:u16[3],d:bool" compiled (channels/layout.h)
+  static const char layout[] = {kU8, 1, kU32, 1, kU16, 3, kBool, 1, kVoid};
+  ValueType s{kStruct, 0, layout};
   List<uint16_t, 6> l{};
   for (uint16_t i = 0; i < 4; ++i) l.push((uint16_t)(0x1111 * (i + 1)));
-  ValueType lt{listOf(kU16), 6, Text(), nullptr};
+  ValueType lt{listOf(kU16), 6, nullptr};
   char str[9] = "window";
-  ValueType st{kStr, 8, Text(), nullptr};
+  ValueType st{kStr, 8, nullptr};
   int16_t arr[4] = {1, -1, 300, -300};
-  ValueType at{kI16, 4, Text(), nullptr};
+  ValueType at{kI16, 4, nullptr};
   struct Case {
     const ValueType* t;
     const void* mem;

@@ -42,6 +42,21 @@ TEST(Layout, SizeMatchesTheStructWithItsAlignment) {
   static_assert(layoutSize("ax:f32,gyro:i16[3]") == sizeof(Imu), "worked out while compiling");
 }
 
+std::string compiled(const char* layout) {
+  std::string s;
+  for (size_t i = 0; i < compiledLayoutLength(layout); ++i) s += (char)compiledLayoutAt(layout, i);
+  return s;
+}
+
+// What the board's struct codec reads: type code and element count a field, then kVoid.
+TEST(Layout, CompiledFormHasTypeAndCountPerField) {
+  EXPECT_EQ(compiled("ax:f32,gyro:i16[3]"), std::string({(char)kF32, 1, (char)kI16, 3, (char)kVoid}));
+  EXPECT_EQ(compiled("x:u8"), std::string({(char)kU8, 1, (char)kVoid}));
+  EXPECT_EQ(compiled("on:bool,n:u16,k:i8[255],d:f64"),
+            std::string({(char)kBool, 1, (char)kU16, 1, (char)kI8, (char)255, (char)kF64, 1, (char)kVoid}));
+  static_assert(compiledLayoutAt("a:u8,b:f64[2]", 3) == 2, "worked out while compiling");
+}
+
 TEST(Layout, MalformedTextsHaveNoSize) {
   const char* bad[] = {"",         "a",        "a:",       ":u8",        "a:u9",       "a:u8[",
                        "a:u8[0]",  "a:u8[256]", "a:u8[3",  "a:u8,",      "a:u8,,b:u8", "a:u8]",

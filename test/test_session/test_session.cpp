@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 #include <random>
 #include <type_traits>
 
@@ -625,6 +626,25 @@ TEST_F(Session, LinkLossTimeoutFollowsTheHubsHeartbeat) {
   EXPECT_TRUE(device.linked());
   pump(1);
   EXPECT_FALSE(device.linked());
+}
+
+// A session starts with all its state zero, the receiver's included, wherever it is built: the
+// Arduino face's global starts in zeroed memory, a local or a test's object does not.
+TEST_F(Session, ASessionBuiltOverDirtyMemoryStartsClean) {
+  alignas(hubwire::Session) unsigned char mem[sizeof(hubwire::Session)];
+  memset(mem, 0xA5, sizeof(mem));
+  hubwire::Session* s = new (mem) hubwire::Session(port);
+  EXPECT_EQ(s->counters().crc, 0);
+  EXPECT_EQ(s->counters().overflow, 0);
+  EXPECT_EQ(s->counters().dropped, 0);
+  EXPECT_EQ(s->eventsQueued(), 0);
+  ASSERT_TRUE(s->begin(tester, 1));
+  drain(stream);
+  sendFrame(stream, '*', 0, 0, hubHello(5));
+  s->update();
+  EXPECT_TRUE(s->linked());
+  EXPECT_EQ(s->counters().dropped, 0);
+  s->~Session();
 }
 
 // Session times are 16-bit milliseconds: a slow hub's timeout is capped just below 65.5 s, and

@@ -60,7 +60,8 @@ TEST(Tables, OneRecordPerChannelWithItsFlashCopies) {
   const ChannelInfo& ps = bench.channels[1];
   EXPECT_EQ(ps.type.code, kStruct);
   EXPECT_EQ(ps.limits, nullptr);  // none declared: none in flash
-  EXPECT_EQ(std::string(ps.type.layout.ptr), "x:f32,ok:u8");
+  const char compiled[] = {kF32, 1, kU8, 1, kVoid};  // "x:f32,ok:u8", two bytes a field
+  EXPECT_EQ(std::string(ps.type.layout, sizeof(compiled)), std::string(compiled, sizeof(compiled)));
   const ChannelInfo& lamp = bench.channels[2];
   ASSERT_NE(lamp.call, nullptr);
   EXPECT_EQ(*(void (*const*)(bool))lamp.call, &setLamp);

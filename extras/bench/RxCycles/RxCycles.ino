@@ -208,7 +208,7 @@ void setup() {
     (void)last;
   }
   {
-    static uint8_t txbuf[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+    static uint8_t txbuf[HUBWIRE_SEND_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
     hubwire::FrameWriter tx(txbuf);
     hubwire::Port sink(feed);  // the device's own write path, minus the UART
     markStart(26);  // 26: FrameWriter::send() of an empty ACK (CRC + COBS + writes)

@@ -217,8 +217,8 @@ struct ChannelInfo {
 // record per channel, all in flash.
 struct ChannelTable {
   const char* json;  // in flash, just after the first kDigestSize bytes of its SHA-256
-  uint16_t jsonLength;
   uint32_t hash;  // FNV-1a of the JSON, worked out by the compiler as well
+  uint16_t jsonLength;  // just after hash: hello carries the two as they are in memory
   const ChannelInfo* channels;
   uint8_t count;
 };

@@ -99,14 +99,20 @@
                       ::HubwireHubTag<hubwire_channels_##var::large, hubwire_channels_##var::Tag>::type>::member \
       HUBWIRE_UNUSED = value;
 
-// The sketch's features, for the session to test (features.h), and the missions' hook
-// (session/missions.h); neither with HUBWIRE_ALL_FEATURES, whose programs (several tables) get the
-// library's defaults built with it: every feature, missions reachable (session/mission_flag.cpp).
+// The sketch's features, for the session to test (features.h), its struct codec (wire/values.h)
+// and the missions' hook (session/missions.h); none with HUBWIRE_ALL_FEATURES, whose programs
+// (several tables) get the library's defaults built with it: every feature, missions reachable
+// (session/mission_flag.cpp). The codec's user alignment keeps GCC's identical-constant folding
+// from merging a null codec with the library's null hooks: merged, the hooks were no longer folded
+// into the code that reads them (Missions: +28 B flash, +6 B SRAM).
 #if defined(HUBWIRE_ALL_FEATURES)
 #define HUBWIRE_SKETCH_FEATURES(f)
 #define HUBWIRE_MISSIONS_HOOK(...)
 #else
-#define HUBWIRE_SKETCH_FEATURES(f) const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;
+#define HUBWIRE_SKETCH_FEATURES(f)                                                                 \
+  const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;                                       \
+  const ::hubwire::StructCodec hubwire::sketchStructCodec HUBWIRE_RODATA __attribute__((aligned(2))) = \
+      ((f) & ::hubwire::kUsesStructs) ? &::hubwire::structCodec : nullptr;
 #define HUBWIRE_MISSIONS_HOOK(...) __VA_ARGS__
 #endif
 

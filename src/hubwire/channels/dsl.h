@@ -22,7 +22,7 @@ namespace declare {
 struct NotNumeric {
   constexpr NotNumeric() {}
 };
-struct StructValue : NotNumeric {  // marks a struct channel: its layout text is copied to flash
+struct StructValue : NotNumeric {  // marks a struct channel: its compiled layout is kept in flash
   constexpr StructValue() {}
 };
 template <typename T>
@@ -211,11 +211,11 @@ class Decl {
     return i < pieceLength(piece(k, id)) ? pieceAt(piece(k, id), i)
                                          : jsonAt(id, i - pieceLength(piece(k, id)), (uint8_t)(k + 1));
   }
-  // What the session needs at run time, given the flash copies it points to: a struct's layout
-  // text and codec (named only for structs: a sketch without them links none), the function a
+  // What the session needs at run time, given the flash copies it points to: a struct's compiled
+  // layout, the function a
   // control or action calls or a variable's onChange, the range and failsafe values.
-  constexpr ChannelInfo info(const char* layout, StructCodec structs, const void* call, const ChannelLimits* limits) const {
-    return ChannelInfo{ValueType{code_, count_, Text(layout, true), structs}, ret_, data_, call, thunk_, limits,
+  constexpr ChannelInfo info(const char* layout, const void* call, const ChannelLimits* limits) const {
+    return ChannelInfo{ValueType{code_, count_, layout}, ret_, data_, call, thunk_, limits,
                        access_, (uint8_t)(flags_ & (kHasRange | kHasFailsafe))};
   }
   constexpr ChannelLimits limits() const {

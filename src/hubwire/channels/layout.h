@@ -1,7 +1,7 @@
 // A struct channel's layout text, "ax:f32,gyro:i16[3]" (name:type[count] per field, in order),
 // read while the sketch compiles: its size with the board's alignment (checked against sizeof the
-// struct, tables.h) and the descriptor's "f" list it stands for (json.h). Also the type names the
-// descriptor and layouts spell.
+// struct, tables.h), the descriptor's "f" list it stands for (json.h) and the compiled form the
+// board's struct codec reads. Also the type names the descriptor and layouts spell.
 #ifndef HUBWIRE_CHANNELS_LAYOUT_H
 #define HUBWIRE_CHANNELS_LAYOUT_H
 
@@ -96,6 +96,20 @@ constexpr size_t layoutWireAfter(const char* s, size_t next, size_t acc) {
   return s[next] == ',' ? layoutWireField(s, next + 1, acc) : acc;
 }
 constexpr size_t layoutWireSize(const char* s) { return *s ? layoutWireField(s, 0, 0) : 0; }
+
+// What the board keeps of a (well-formed) layout: per field its type code and element count (1 for
+// a scalar), then kVoid, so that the struct codec reads two bytes a field instead of parsing text.
+// "ax:f32,gyro:i16[3]" -> {kF32, 1, kI16, 3, kVoid}.
+constexpr size_t layoutFields(const char* s, size_t j = 0) { return s[j] ? (s[j] == ',') + layoutFields(s, j + 1) : 1; }
+constexpr size_t fieldAt(const char* s, size_t k, size_t j = 0) {  // where field k starts
+  return k == 0 ? j : fieldAt(s, s[j] == ',' ? k - 1 : k, j + 1);
+}
+constexpr size_t compiledLayoutLength(const char* s) { return 2 * layoutFields(s) + 1; }
+constexpr uint8_t compiledLayoutAt(const char* s, size_t i) {
+  return i == 2 * layoutFields(s) ? (uint8_t)kVoid
+       : i % 2 == 0             ? (uint8_t)layoutTypeAt(s, colonAt(s, fieldAt(s, i / 2)) + 1)
+                                : (uint8_t)countOf(s, typeEnd(s, colonAt(s, fieldAt(s, i / 2)) + 1));
+}
 
 }  // namespace declare
 }  // namespace hubwire

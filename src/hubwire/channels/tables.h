@@ -215,11 +215,12 @@ constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32
   return hashOf(b.rest, fnvChars(b.first.c, sizeof(b.first.c), h));
 }
 
-// A struct channel's layout text, copied into flash for the session's struct codec.
+// A struct channel's layout, compiled to two bytes a field (layout.h) into flash for the session's
+// struct codec.
 template <typename D, const D* Decls, size_t I>
 struct LayoutPart {
-  static constexpr size_t length() { return cx::length(DeclAt<D, Decls, I>::decl.layout()) + 1; }
-  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.layout()[i]; }
+  static constexpr size_t length() { return compiledLayoutLength(DeclAt<D, Decls, I>::decl.layout()); }
+  static constexpr char at(size_t i) { return (char)compiledLayoutAt(DeclAt<D, Decls, I>::decl.layout(), i); }
 };
 
 template <typename T, Kind K, typename C>
@@ -245,7 +246,6 @@ template <typename D, const D* Decls, size_t I, bool IsStruct = isStruct((typena
 struct LayoutStore {
   constexpr LayoutStore() {}
   constexpr const char* layout() const { return nullptr; }
-  static constexpr StructCodec codec() { return nullptr; }
 };
 template <typename D, const D* Decls, size_t I>
 struct LayoutStore<D, Decls, I, true> {
@@ -254,7 +254,6 @@ struct LayoutStore<D, Decls, I, true> {
                 "types bool u8 i8 u16 i16 u32 i32 f32 f64 (e.g. \"ax:f32,gyro:i16[3]\")");
   constexpr LayoutStore() : text(Chars<LayoutPart<D, Decls, I> >::make()) {}
   constexpr const char* layout() const { return text.c; }
-  static constexpr StructCodec codec() { return &structCodec; }
   Chars<LayoutPart<D, Decls, I> > text;
 };
 template <typename D, const D* Decls, size_t I, bool HasCall = DeclAt<D, Decls, I>::decl.hasCall()>
@@ -297,7 +296,7 @@ struct Extras<D, Decls, cx::Seq<I, R...> > : Extra<D, Decls, I>, Extras<D, Decls
 template <typename D, const D* Decls, size_t I>
 struct InfoOf : Checked<D, Decls, I> {
   static constexpr ChannelInfo make(const Extra<D, Decls, I>& e) {
-    return DeclAt<D, Decls, I>::decl.info(e.layout(), LayoutStore<D, Decls, I>::codec(), e.call(), e.limits());
+    return DeclAt<D, Decls, I>::decl.info(e.layout(), e.call(), e.limits());
   }
 };
 
@@ -353,11 +352,11 @@ constexpr ChannelTable table(const typename Stored<D, Decls>::JsonType& json,
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
   static_assert(sizeof(JsonAndDigest<D, Decls>) == sizeof(JsonText<D, Decls>) + kDigestSize,
                 "the JSON follows the digest without a gap");
-  return ChannelTable{json.text.head.c, (uint16_t)sizeof(JsonText<D, Decls>),
+  return ChannelTable{json.text.head.c,
                       hashOf(Json<D, Decls>::value.text.body,
                              fnvChars(Json<D, Decls>::value.text.head.c, sizeof(Json<D, Decls>::value.text.head.c),
                                       kFnvOffset)),
-                      infos.v,
+                      (uint16_t)sizeof(JsonText<D, Decls>), infos.v,
                       D::size()};
 }
 

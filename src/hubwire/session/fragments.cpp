@@ -68,13 +68,13 @@ void fragmentReceived(Session& s, const Frame& f) {
 bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch, const uint8_t* prefix,
                uint8_t prefixLen, bool room) {
   uint16_t total = (uint16_t)(prefixLen + ch.type.wireLength(ch.data));
-  uint8_t* out = s.tx_.payload();
+  uint8_t* out = s.tx().payload();
   uint8_t max = s.maxOut();
   if (total <= max) {  // a list that is not full may fit after all
     if (room && portWritable(s.port_) < FrameWriter::wireSize(total)) return false;
     if (prefixLen) memcpy(out, prefix, prefixLen);  // a read has none (prefix nullptr)
     ch.type.toWire(ch.data, out + prefixLen);
-    s.tx_.send(s.port_, type, seq, id, (uint8_t)total);
+    s.tx().send(s.port_, type, seq, id, (uint8_t)total);
     return true;
   }
   uint8_t per = (uint8_t)(max - kFragmentHeader);  // max >= 16
@@ -92,7 +92,7 @@ bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelI
       --left;
     }
     ch.type.wireRange(ch.data, (uint16_t)(from - prefixLen), at, left);
-    s.tx_.send(s.port_, kMsgFragment, seq, id, (uint8_t)(kFragmentHeader + n));
+    s.tx().send(s.port_, kMsgFragment, seq, id, (uint8_t)(kFragmentHeader + n));
   }
   return true;
 }

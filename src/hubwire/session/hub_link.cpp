@@ -218,8 +218,8 @@ void Session::hubPoll(uint16_t now) {
     ++e.tries;  // while the link is down, a try passes unsent: the request still ends
     e.at = now;
     if (canSend) {
-      memcpy(tx_.payload(), e.data, e.len);
-      tx_.send(port_, e.type, l.headSeq, e.id, e.len);
+      memcpy(tx().payload(), e.data, e.len);
+      tx().send(port_, e.type, l.headSeq, e.id, e.len);
     }
     return;
   }

@@ -45,7 +45,7 @@ bool Session::missionFrame(const Frame& f) {
   if ((f.type != kMsgControl && f.type != kMsgRequest) || !find(f.id, ch) || !(ch.access & kMissionAccess))
     return false;
   MissionState& m = *static_cast<MissionState*>(ch.data);
-  uint8_t* out = tx_.payload();  // the same bytes as f.payload: read before written
+  uint8_t* out = tx().payload();  // the same bytes as f.payload: read before written
   if (f.type == kMsgRequest) {
     if (f.len != 0) return sendNak(f, kErrBadLength), true;
     out[0] = m.run_;
@@ -110,7 +110,7 @@ uint8_t Session::missionStart(const Frame& f, const ChannelInfo& ch, MissionStat
     m.flags_ = 0;  // whatever the refusing start function reported is dropped with its run
     return kErrRejected;
   }
-  tx_.payload()[0] = m.run_;
+  tx().payload()[0] = m.run_;
   return kOk;
 }
 
@@ -192,8 +192,8 @@ void Session::missionSend() {
   flashCopy(&calls, ch.call, sizeof(calls));
   const uint8_t* sent = reinterpret_cast<const uint8_t*>(ch.data) + sizeof(MissionState) +
                         atLeastOne(calls.progressSize) + atLeastOne(calls.resultSize);
-  memcpy(tx_.payload(), sent, l.len);
-  tx_.send(port_, kMsgMission, l.seq, l.id, l.len);
+  memcpy(tx().payload(), sent, l.len);
+  tx().send(port_, kMsgMission, l.seq, l.id, l.len);
   l.sentAt = ms();
 }
 

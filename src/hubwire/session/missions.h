@@ -39,9 +39,11 @@ struct MissionState {
   uint8_t run() const { return run_; }
 };
 
+// Capped at 255 so that a type too wide for a mission is refused by the declaration's
+// static_assert (a scalar), not by the compiler's overflow of this byte.
 template <typename T>
 struct MissionSize {
-  static const uint8_t value = sizeof(T);
+  static const uint8_t value = sizeof(T) > 255 ? 255 : (uint8_t)sizeof(T);
 };
 template <>
 struct MissionSize<void> {

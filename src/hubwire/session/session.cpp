@@ -24,9 +24,8 @@ __attribute__((always_inline)) static inline bool missionHook(Session& s, uint8_
 
 Session::Session(Port& port)
     : SessionState(),  // all zero
-      port_(port),
-      rx_(frameBuf_, sizeof(frameBuf_)),
-      tx_(frameBuf_) {
+      port_(port) {
+  rx_.attach(frameBuf_ + 1, sizeof(frameBuf_) - 2);  // the writer's code byte and delimiter around it
   peerMax_ = kHelloSize;  // all a hub not yet heard is sure to accept (PROTOCOL.md 3.1)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
@@ -110,10 +109,14 @@ void Session::drawNonce(uint32_t hubNonce) {
 void Session::update() {
   if (!started_) return;
   uint8_t i = 0;
+  uint16_t start = ms();  // when the frames read below are taken to have come
   for (; i < kMaxBytesPerUpdate; ++i) {
     int c = portRead(port_);
     if (c < 0) break;
-    if (rx_.feed((uint8_t)c)) handle(rx_.frame());
+    if (rx_.feed((uint8_t)c)) {
+      lastRx_ = start;
+      handle(rx_.frame());
+    }
   }
   uint16_t now = ms();
   if (i) lastByte_ = now;
@@ -141,19 +144,16 @@ void Session::update() {
 }
 
 void Session::handle(const Frame& f) {
-  lastRx_ = ms();
   switch (f.type) {
     case kMsgHello:
-      onHello(f);
-      return;
+      return onHello(f);
     case kMsgHeartbeat:
-      if (!linked_) sendHello(false);  // the hub thinks we are linked: invite it to handshake again
-      else hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
+      if (!linked_) return sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
     case kMsgNak:
-      onAck(f, f.type == kMsgNak);
-      return;
+      return onAck(f, f.type == kMsgNak);
     case kMsgChunk:
     case kMsgRequest:
     case kMsgControl:
@@ -163,38 +163,29 @@ void Session::handle(const Frame& f) {
       if (HubwireLarge<true, void>::receive && f.type == kMsgFragment) return HubwireLarge<true, void>::receive(*this, f);
       if (hubHook(*this, true)) return;  // hub events, answers to the device's requests
       ++rx_.counters.dropped;
-      sendNak(f, kErrUnknownType);
-      return;
+      return sendNak(f, kErrUnknownType);
   }
-  if (!linked_) {
-    sendNak(f, kErrNotLinked);
-    return;
-  }
-  bool duplicate = f.type == kMsgControl && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ &&
-                   f.id == lastTxnId_;
-  if (duplicate) {  // a retried control: answer again, do not apply twice
-    memcpy(tx_.payload(), replyData_, replyLen_);
-    reply(replyType_, f, replyLen_);
-    return;
+  if (!linked_) return sendNak(f, kErrNotLinked);
+  bool control = f.type == kMsgControl;
+  if (control && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
+    // a retried control: answer again, do not apply twice
+    memcpy(tx().payload(), replyData_, replyLen_);
+    return reply(replyType_, f, replyLen_);
   }
   lastTxnValid_ = true;
-  lastTxnControl_ = f.type == kMsgControl;
+  lastTxnControl_ = control;
   lastTxnSeq_ = f.seq;
   lastTxnId_ = f.id;
   if (missionHook(*this, kMissionFrame)) return;  // a mission's start, cancel or state
   switch (f.type) {
-    case kMsgChunk:
-      onChunk(f);
-      break;
-    case kMsgRequest:
-      onRequest(f);
-      break;
     case kMsgControl:
-      onControl(f);
-      break;
+      return onControl(f);
+    case kMsgRequest:
+      return onRequest(f);
+    case kMsgChunk:
+      return onChunk(f);
     default:
-      onSubscribe(f);
-      break;
+      return onSubscribe(f);
   }
 }
 
@@ -214,7 +205,7 @@ void Session::onHello(const Frame& f) {
   bool fromHub = version == kProtocolVersion && !(flags & kHelloDevice);
   // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap. Known
   // before the answer, which carries the digest only if this hub accepts it.
-  if (fromHub) peerMax_ = (uint8_t)(max > 255 ? 255 : max < kHelloSize ? kHelloSize : max);
+  if (fromHub) peerMax_ = (uint8_t)(max > HUBWIRE_MAX_PAYLOAD ? HUBWIRE_MAX_PAYLOAD : max < kHelloSize ? kHelloSize : max);
   if (!(flags & kHelloReply)) sendHello(true);
   if (!fromHub) return;  // the hub reports the mismatch
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
@@ -268,8 +259,7 @@ void Session::onChunk(const Frame& f) {
   uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
   if (total - offset < n) n = (uint16_t)(total - offset);
-  uint8_t* out = tx_.payload();
-  storeU16(out, offset);
+  uint8_t* out = tx().payload();  // where the request is: its offset is already the answer's
   storeU16(out + 2, total);
   fromFlash(out + kChunkHeader, table_.json + offset, n);
   reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
@@ -280,16 +270,17 @@ void Session::onRequest(const Frame& f) {
   if (!find(f.id, ch)) {
     // Id 0 is the link itself: reading it asks for the board id (at most 16 bytes, which every
     // hub accepts), where the board has one.
-    uint8_t n = f.id == 0 && f.len == 0 ? portBoardId(port_, tx_.payload()) : 0;
+    uint8_t n = f.id == 0 && f.len == 0 ? portBoardId(port_, tx().payload()) : 0;
     if (n) return reply(kMsgResponse, f, n);
     return sendNak(f, kErrUnknownChannel);
   }
   if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
-  if (HubwireLarge<true, void>::send && f.len == 0)  // a value that may not fit one frame (fragments.cpp)
+  // Not sent at all when the hub could not take it (its hello said how much it accepts), unless
+  // it may go as fragments (fragments.cpp).
+  if (f.len != 0 || (!HubwireLarge<true, void>::send && ch.type.wireSize() > maxOut())) return sendNak(f, kErrBadLength);
+  if (HubwireLarge<true, void>::send)
     return (void)HubwireLarge<true, void>::send(*this, kMsgResponse, f.seq, f.id, ch, nullptr, 0, false);
-  // Not sent at all when the hub could not take it (its hello said how much it accepts).
-  if (f.len != 0 || ch.type.wireSize() > maxOut()) return sendNak(f, kErrBadLength);
-  reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx_.payload()));
+  reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx().payload()));
 }
 
 void Session::onControl(const Frame& f) {
@@ -315,7 +306,7 @@ void Session::onControl(const Frame& f) {
     }
     if (code == kOk) {
       if (uses(kUsesCalls) && ch.thunk) {
-        uint8_t* ret = tx_.payload();
+        uint8_t* ret = tx().payload();
         if (!ch.thunk(ch.call, f.payload, ret)) {
           code = kErrRejected;
         } else if (uses(kUsesReturns) && ch.ret != kVoid) {
@@ -332,12 +323,12 @@ void Session::onControl(const Frame& f) {
   if (code != kOk) {
     type = kMsgNak;
     len = 1;
-    tx_.payload()[0] = code;
+    tx().payload()[0] = code;
   }
   if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
-  memcpy(replyData_, tx_.payload(), len);
+  memcpy(replyData_, tx().payload(), len);
   reply(type, f, len);
 }
 
@@ -349,11 +340,12 @@ void Session::onSubscribe(const Frame& f) {
     return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
-  if (!streams_.subscribe(f.id, interval, ms())) return sendNak(f, kErrBusy);
+  // Timed by update()'s clock read, as the frame is: the first sample's time since is from then.
+  if (!streams_.subscribe(f.id, interval, lastRx_)) return sendNak(f, kErrBusy);
 #else
   if (interval != 0) return sendNak(f, kErrBusy);
 #endif
-  storeU16(tx_.payload(), interval);
+  storeU16(tx().payload(), interval);
   reply(kMsgAck, f, 2);
 }
 
@@ -373,11 +365,11 @@ void Session::sendSamples(uint16_t now) {
       if (HubwireLarge<true, void>::send(*this, kMsgSample, s.seq, s.id, ch, since, kSampleHeader, true)) s.sent(now);
       continue;
     }
-    uint8_t* out = tx_.payload();
+    uint8_t* out = tx().payload();
     uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
     if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
     storeU16(out, s.since(now));
-    tx_.send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
+    tx().send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
     s.sent(now);
   }
 #else
@@ -392,44 +384,44 @@ bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
 
 void Session::sendEvent(uint16_t now) {
   const EventQueue::Entry& e = events_.send(now);
-  memcpy(tx_.payload(), e.data, e.len);
-  tx_.send(port_, kMsgEvent, events_.seq(), e.id, e.len);
+  memcpy(tx().payload(), e.data, e.len);
+  tx().send(port_, kMsgEvent, events_.seq(), e.id, e.len);
 }
 
 void Session::sendHello(bool isReply) {
   if (!nonceDrawn_) drawNonce(0);
-  uint8_t* p = tx_.payload();
+  uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
-  storeU32(p + 2, nonce_);
+  // Multi-byte fields are copied as they are in memory: that is their wire form (config.h).
+  memcpy(p + 2, &nonce_, 4);
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
-  storeU32(p + 10, table_.hash);
-  storeU16(p + 14, table_.jsonLength);
+  static_assert(offsetof(ChannelTable, jsonLength) == offsetof(ChannelTable, hash) + 4, "hash, then length");
+  memcpy(p + 10, &table_.hash, 6);
   // The descriptor's digest (just before the JSON in flash), sent to a hub that accepts it: one
   // that accepts only 16 bytes gets the hello it knows.
   if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd) fromFlash(p + kHelloSize, table_.json - kDigestSize, kDigestSize);
-  tx_.send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
+  tx().send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
 }
 
 void Session::sendHeartbeat(uint16_t now) {
-  uint8_t* p = tx_.payload();
+  uint8_t* p = tx().payload();
   ++beatCounter_;
   storeU16(p, beatCounter_);
   storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastSent_) : 0);
-  storeU16(p + 4, rx_.counters.crc);
-  storeU16(p + 6, rx_.counters.overflow);
-  storeU16(p + 8, rx_.counters.dropped);
-  tx_.send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
+  static_assert(sizeof(LinkCounters) == 6, "crc, overflow, dropped: the heartbeat's order");
+  memcpy(p + 4, &rx_.counters, 6);
+  tx().send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
   lastSent_ = now;
   beatSent_ = true;
 }
 
 void Session::sendNak(const Frame& f, uint8_t code) {
-  tx_.payload()[0] = code;
+  tx().payload()[0] = code;
   reply(kMsgNak, f, 1);
 }
 
-void Session::reply(uint8_t type, const Frame& f, uint8_t len) { tx_.send(port_, type, f.seq, f.id, len); }
+void Session::reply(uint8_t type, const Frame& f, uint8_t len) { tx().send(port_, type, f.seq, f.id, len); }
 
 }  // namespace hubwire

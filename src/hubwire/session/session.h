@@ -54,15 +54,16 @@ struct SessionState {
   bool lastTxnControl_ : 1;  // ... which was a control
 
   // One buffer receives and sends frames: an answer is built where its question was (handlers
-  // read the question first), and frames of our own wait until no frame is arriving.
-  uint8_t frameBuf_[HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
+  // read the question first), and frames of our own wait until no frame is arriving. The writer
+  // encodes in place from its first byte on, the receiver uses the rest (frame.h).
+  uint8_t frameBuf_[HUBWIRE_SEND_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
 
   // The sketch's channels (all in flash).
   ChannelTable table_;
 
   // Session.
   uint32_t nonce_, hubNonce_;  // nonce_ holds begin()'s seed until it is drawn
-  uint8_t peerMax_;
+  uint8_t peerMax_;  // the longest payload we send: the hub's limit, at most HUBWIRE_MAX_PAYLOAD
   // Times are the low 16 bits of millis(): every interval here stays below 65 s, so differences
   // are exact as long as update() runs at least that often.
   uint16_t lostAfterMs_;  // the hub's heartbeat interval x HUBWIRE_LOST_AFTER_BEATS
@@ -82,6 +83,7 @@ struct SessionState {
 #if HUBWIRE_MAX_STREAMS > 0
   Streams streams_;  // the hub's subscriptions
 #endif
+  FrameReceiver rx_;  // zeroed with the rest; the constructor attaches frameBuf_
 };
 
 class Session : private SessionState {
@@ -274,18 +276,18 @@ class Session : private SessionState {
   void newHubSession(uint32_t nonce);
   void loseLink();
   void sendHello(bool reply);
-  void drawNonce(uint32_t hubNonce);
+  HUBWIRE_NOINLINE void drawNonce(uint32_t hubNonce);  // two callers: one copy
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
   void sendSamples(uint16_t now);
   void sendNak(const Frame& f, uint8_t code);
   void reply(uint8_t type, const Frame& f, uint8_t len);
-  uint8_t maxOut() const { return peerMax_ < HUBWIRE_MAX_PAYLOAD ? peerMax_ : HUBWIRE_MAX_PAYLOAD; }
+  uint8_t maxOut() const { return peerMax_; }
 
   Port& port_;
-  FrameReceiver rx_;
-  FrameWriter tx_;
+  // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.
+  FrameWriter tx() { return FrameWriter(frameBuf_); }
 };
 
 }  // namespace hubwire

@@ -23,19 +23,6 @@ size_t cobsEncode(const uint8_t* in, size_t n, uint8_t* out) {
   return o;
 }
 
-void cobsEncodeTo(const uint8_t* in, size_t n, Port& out) {
-  size_t start = 0;
-  for (;;) {
-    size_t end = start;
-    while (end < n && in[end] != 0 && end - start < 254) ++end;
-    uint8_t code = (uint8_t)(end - start + 1);
-    portWrite(out, &code, 1);
-    portWrite(out, in + start, end - start);
-    if (end >= n) return;
-    start = (code == 0xFF) ? end : end + 1;  // skip the zero a short block stands for
-  }
-}
-
 bool cobsDecode(const uint8_t* in, size_t n, uint8_t* out, size_t cap, size_t* outLen) {
   size_t i = 0, o = 0;
   while (i < n) {

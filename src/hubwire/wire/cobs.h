@@ -5,8 +5,6 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "../port.h"
-
 namespace hubwire {
 
 // Largest encoding of n bytes (without the 0x00 delimiter).
@@ -14,9 +12,6 @@ inline size_t cobsMaxEncoded(size_t n) { return n + n / 254 + 1; }
 
 // Encodes n bytes into out (room for cobsMaxEncoded(n)); returns the encoded length.
 size_t cobsEncode(const uint8_t* in, size_t n, uint8_t* out);
-
-// Encodes n bytes straight to a stream, block by block, without a second buffer.
-void cobsEncodeTo(const uint8_t* in, size_t n, Port& out);
 
 // Decodes an encoded block (no delimiter) into out; false when malformed or longer than cap.
 bool cobsDecode(const uint8_t* in, size_t n, uint8_t* out, size_t cap, size_t* outLen);

@@ -22,21 +22,19 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
     uint16_t len = (uint16_t)(at_ - buf_);
     reset();
     if (!wasStarted) return false;  // lone delimiter: a sender flushing line noise
+    uint16_t* bad;  // the counter of the reason it is dropped: one increment for all of them
     if (overflowed) {
-      ++counters.overflow;
-      return false;
+      bad = &counters.overflow;
+    } else if (!complete || len < kFrameOverhead) {
+      bad = &counters.dropped;
+    } else if (crc16(buf_, len - 2) != loadU16(buf_ + len - 2)) {
+      bad = &counters.crc;
+    } else {
+      frameLen_ = (uint8_t)(len - kFrameOverhead);
+      return true;
     }
-    if (!complete || len < kFrameOverhead) {
-      ++counters.dropped;
-      return false;
-    }
-    uint16_t got = loadU16(buf_ + len - 2);
-    if (crc16(buf_, len - 2) != got) {
-      ++counters.crc;
-      return false;
-    }
-    frameLen_ = (uint8_t)(len - kFrameOverhead);
-    return true;
+    ++*bad;
+    return false;
   }
   started_ = true;
   if (beyond_ != 0) {  // a data byte past the end of the buffer, or one after it: skip to the delimiter
@@ -60,15 +58,35 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
   return false;
 }
 
-void FrameWriter::send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
-  buf_[0] = type;
-  buf_[1] = seq;
-  buf_[2] = id;
+void FrameWriter::sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
+  uint8_t* raw = buf + 1;
+  raw[0] = type;
+  raw[1] = seq;
+  raw[2] = id;
   uint16_t n = (uint16_t)(kFrameHeader + len);
-  storeU16(buf_ + n, crc16(buf_, n));
-  cobsEncodeTo(buf_, n + 2u, out);
-  uint8_t delimiter = 0;
-  portWrite(out, &delimiter, 1);
+  storeU16(raw + n, crc16(raw, n));
+  // COBS in place: code points at the slot of the open block's code byte (buf[0], then each zero
+  // as it is reached), run counts from it to p, from is the first byte not yet written.
+  uint8_t* code = buf;
+  uint8_t* from = buf;
+  uint8_t* end = raw + n + 2;
+  uint8_t run = 1;
+  for (uint8_t* p = raw; p != end; ++p, ++run) {
+    if (run == 0xFF) {  // 254 data bytes: a full block, no implied zero; the next block's code
+      *code = 0xFF;     // goes where its last byte was, once that is written
+      portWrite(out, from, (size_t)(p - from));
+      from = code = p - 1;
+      run = 1;
+    }
+    if (*p == 0) {
+      *code = run;
+      code = p;
+      run = 0;
+    }
+  }
+  *code = run;
+  *end = 0;  // the delimiter
+  portWrite(out, from, (size_t)(end + 1 - from));
 }
 
 size_t encodeFrame(uint8_t type, uint8_t seq, uint8_t id, const uint8_t* payload, uint8_t len, uint8_t* out) {

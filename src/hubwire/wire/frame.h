@@ -16,6 +16,9 @@ const uint16_t kProtocolMaxPayload = 255;
 
 // Raw frame bytes needed to hold a payload of n bytes.
 #define HUBWIRE_RAW_FRAME_SIZE(n) ((n) + 5)
+// A FrameWriter's buffer for payloads of up to n bytes: the raw frame, the slot of the first COBS
+// code byte before it and the delimiter after it (the frame is encoded where it was built).
+#define HUBWIRE_SEND_FRAME_SIZE(n) ((n) + 7)
 
 // A decoded frame. payload points into the receiver's buffer and stays valid until the next feed().
 struct Frame {
@@ -38,6 +41,15 @@ class FrameReceiver {
  public:
   // buffer holds capacity raw bytes: HUBWIRE_RAW_FRAME_SIZE(largest accepted payload).
   FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), end_(buffer + capacity) { reset(); }
+  // A receiver without a buffer yet: value-initialised (FrameReceiver r{} or as a member of a
+  // value-initialised whole) it is all zero, and attach() then sets only its pointers.
+  FrameReceiver() = default;
+
+  // Gives a zeroed receiver its buffer.
+  void attach(uint8_t* buffer, uint16_t capacity) {
+    buf_ = at_ = buffer;
+    end_ = buffer + capacity;
+  }
 
   // Takes one byte; true when it completed a valid frame, which frame() then describes.
   // Most bytes are data inside a COBS block that fit the buffer: that case is a store and a count,
@@ -75,17 +87,24 @@ class FrameReceiver {
   uint8_t frameLen_;     // payload length of the last completed frame
 };
 
-// Builds frames in a fixed buffer and writes them COBS-encoded to a stream.
+// Builds frames in a fixed buffer and writes them COBS-encoded to a stream. The encoding is done
+// in the buffer itself (each zero becomes the code byte of the block it ends), so a frame goes out
+// in one write (two past 254 bytes) without a copy; send() leaves the buffer's contents undefined.
 class FrameWriter {
  public:
-  // buffer: HUBWIRE_RAW_FRAME_SIZE(largest payload sent) bytes.
+  // buffer: HUBWIRE_SEND_FRAME_SIZE(largest payload sent) bytes. A receiver may share it from
+  // buffer + 1 on: its frame's payload is then where this writer's goes.
   explicit FrameWriter(uint8_t* buffer) : buf_(buffer) {}
   // Where the payload goes.
-  uint8_t* payload() { return buf_ + kFrameHeader; }
+  uint8_t* payload() { return buf_ + 1 + kFrameHeader; }
   // Wire bytes a frame with this payload length takes at most (COBS code bytes and delimiter).
   static size_t wireSize(size_t len) { return len + kFrameOverhead + (len + kFrameOverhead) / 254 + 2; }
   // Adds header and CRC to the len payload bytes already in payload(), and sends the frame.
-  void send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
+  void send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
+    sendFrame(out, buf_, type, seq, id, len);
+  }
+  // The same, for a writer's buffer (a free function: callers need not keep a writer).
+  static void sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
 
  private:
   uint8_t* buf_;

@@ -33,6 +33,16 @@ uint8_t alignOf(TypeCode t) {
 
 uint16_t alignUp(uint16_t v, uint8_t a) { return (uint16_t)((v + a - 1) / a * a); }
 
+bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
+  if (t != kBool) return true;
+  for (uint16_t i = 0; i < n; ++i)
+    if (p[i] > 1) return false;
+  return true;
+}
+
+// A list's elements start at their own alignment after the count byte.
+uint8_t listItems(TypeCode code) { return alignOf(elementOf(code)); }
+
 }  // namespace
 
 uint8_t scalarSize(TypeCode t) {  // arithmetic, not a switch: AVR keeps switch tables in RAM
@@ -46,165 +56,51 @@ Text typeName(TypeCode t) {
   return flashText(kTypeNames + t * kNameStride);
 }
 
-bool LayoutReader::next(LayoutField& f) {
-  if (!ok || text_.at(pos_) == 0) return false;
-  f.nameStart = pos_;
-  while (text_.at(pos_) && text_.at(pos_) != ':') ++pos_;
-  f.nameLen = (uint16_t)(pos_ - f.nameStart);
-  if (text_.at(pos_) != ':' || f.nameLen == 0) return ok = false;
-  ++pos_;
-  // Match the type name against the scalar names.
-  f.code = kVoid;
-  for (uint8_t t = kBool; t <= kF64; ++t) {
-    Text name = typeName((TypeCode)t);
-    uint8_t k = 0;
-    while (name.at(k) && name.at(k) == text_.at(pos_ + k)) ++k;
-    char after = text_.at(pos_ + k);
-    if (name.at(k) == 0 && (after == 0 || after == ',' || after == '[')) {
-      f.code = (TypeCode)t;
-      pos_ = (uint16_t)(pos_ + k);
-      break;
-    }
-  }
-  if (f.code == kVoid) return ok = false;
-  f.count = 0;
-  if (text_.at(pos_) == '[') {
-    ++pos_;
-    uint16_t n = 0;
-    while (text_.at(pos_) >= '0' && text_.at(pos_) <= '9') n = (uint16_t)(n * 10 + (text_.at(pos_++) - '0'));
-    if (text_.at(pos_) != ']' || n == 0 || n > 255) return ok = false;
-    ++pos_;
-    f.count = (uint8_t)n;
-  }
-  if (text_.at(pos_) == ',') {
-    ++pos_;
-    if (text_.at(pos_) == 0) return ok = false;
-  } else if (text_.at(pos_) != 0) {
-    return ok = false;
-  }
-  return true;
-}
-
-namespace {
-
-uint16_t fieldBytes(const LayoutField& f) { return (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1)); }
-
-uint16_t structWireSize(Text layout) {
-  uint16_t n = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) n = (uint16_t)(n + fieldBytes(f));
-  return n;
-}
-
-uint16_t structMemSize(Text layout) {
-  uint16_t n = 0;
+// One walk over the fields serves every operation: the wire form is packed, the memory form has
+// each field at its alignment. Ifs rather than a switch: AVR keeps switch tables in RAM.
+uint16_t structCodec(StructOp op, const char* compiled, const void* in, void* out, uint16_t len) {
+  // A value of the wrong length is refused as such, whatever its bytes.
+  if (op == kStructCheck && len != structCodec(kStructWireSize, compiled, nullptr, nullptr, 0)) return kErrBadLength;
+  Text layout = flashText(compiled);
+  const uint8_t* from = (const uint8_t*)in;
+  uint8_t* to = (uint8_t*)out;
+  uint16_t memOff = 0, wireOff = 0, lo = 0;
   uint8_t maxAlign = 1;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint8_t a = alignOf(f.code);
-    if (a > maxAlign) maxAlign = a;
-    n = (uint16_t)(alignUp(n, a) + fieldBytes(f));
+  // kStructWireRange (large values only, so folded away for every other sketch): in = a window
+  // over the memory form, out = its wire bytes lo .. lo + len.
+  bool window = uses(kUsesLarge) && op == kStructWireRange;
+  if (window) {
+    const StructWindow* w = (const StructWindow*)in;
+    from = (const uint8_t*)w->mem;
+    lo = w->offset;
   }
-  return r.ok ? alignUp(n, maxAlign) : 0;  // 0 also for an empty layout
-}
-
-// Copies field by field between the packed wire form and the aligned memory form.
-uint16_t structCopy(Text layout, uint8_t* mem, uint8_t* wire, bool toWire) {
-  uint16_t memOff = 0, wireOff = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = fieldBytes(f);
-    memOff = alignUp(memOff, alignOf(f.code));
-    if (toWire) {
-      memcpy(wire + wireOff, mem + memOff, n);
-    } else {
-      memcpy(mem + memOff, wire + wireOff, n);
+  for (uint16_t i = 0;; i = (uint16_t)(i + 2)) {
+    TypeCode code = (TypeCode)layout.at(i);
+    if (code == kVoid) break;
+    uint16_t n = (uint16_t)(scalarSize(code) * (uint8_t)layout.at((uint16_t)(i + 1)));
+    uint8_t a = alignOf(code);
+    if (a > maxAlign) maxAlign = a;
+    memOff = alignUp(memOff, a);
+    if (op == kStructToWire) memcpy(to + wireOff, from + memOff, n);
+    if (op == kStructFromWire) memcpy(to + memOff, from + wireOff, n);
+    if (op == kStructCheck && !boolsValid(code, from + wireOff, n)) return kErrBadValue;
+    if (window) {  // the part of this field inside the window
+      uint16_t first = wireOff > lo ? wireOff : lo, end = (uint16_t)(lo + len);
+      if (wireOff + n < end) end = (uint16_t)(wireOff + n);
+      if (first < end) memcpy(to + (first - lo), from + memOff + (first - wireOff), (size_t)(end - first));
     }
     memOff = (uint16_t)(memOff + n);
     wireOff = (uint16_t)(wireOff + n);
   }
-  return wireOff;
-}
-
-uint16_t structToWire(Text layout, const void* mem, uint8_t* wire) {
-  return structCopy(layout, (uint8_t*)mem, wire, true);
-}
-
-void structFromWire(Text layout, const uint8_t* wire, void* mem) {
-  structCopy(layout, (uint8_t*)mem, (uint8_t*)wire, false);
-}
-
-bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
-  if (t != kBool) return true;
-  for (uint16_t i = 0; i < n; ++i)
-    if (p[i] > 1) return false;
-  return true;
-}
-
-ErrorCode structCheck(Text layout, const uint8_t* wire, uint16_t len) {
-  if (len != structWireSize(layout)) return kErrBadLength;
-  uint16_t off = 0;
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f)) {
-    uint16_t n = fieldBytes(f);
-    if (!boolsValid(f.code, wire + off, n)) return kErrBadValue;
-    off = (uint16_t)(off + n);
-  }
-  return kOk;
-}
-
-// Bytes [lo, lo + n) of a struct's wire form, field by field from its aligned memory form.
-uint16_t structWireRange(Text layout, const StructWindow* w, uint8_t* out, uint16_t n) {
-  const uint8_t* mem = (const uint8_t*)w->mem;
-  uint16_t memOff = 0, wireOff = 0, lo = w->offset, hi = (uint16_t)(w->offset + n);
-  LayoutReader r(layout);
-  LayoutField f;
-  while (r.next(f) && wireOff < hi) {
-    // (fieldBytes() and alignUp() spelled out: one more caller would change how the compiler
-    // inlines them into the struct codec of every sketch)
-    uint16_t k = (uint16_t)(scalarSize(f.code) * (f.count ? f.count : 1));
-    uint8_t align = alignOf(f.code);
-    memOff = (uint16_t)((memOff + align - 1) / align * align);
-    uint16_t a = wireOff > lo ? wireOff : lo, b = wireOff + k < hi ? (uint16_t)(wireOff + k) : hi;
-    if (a < b) memcpy(out + (a - lo), mem + memOff + (a - wireOff), (size_t)(b - a));
-    memOff = (uint16_t)(memOff + k);
-    wireOff = (uint16_t)(wireOff + k);
-  }
-  return n;
-}
-
-// A list's elements start at their own alignment after the count byte.
-uint8_t listItems(TypeCode code) { return alignOf(elementOf(code)); }
-
-}  // namespace
-
-uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len) {
-  if (uses(kUsesLarge) && op == kStructWireRange)
-    return structWireRange(layout, (const StructWindow*)in, (uint8_t*)out, len);
-  switch (op) {
-    case kStructWireSize:
-      return structWireSize(layout);
-    case kStructMemSize:
-      return structMemSize(layout);
-    case kStructToWire:
-      return structToWire(layout, in, (uint8_t*)out);
-    case kStructCheck:
-      return structCheck(layout, (const uint8_t*)in, len);
-    case kStructFromWire:
-      structFromWire(layout, (const uint8_t*)in, out);
-      return 0;
-  }
-  return 0;
+  if (op == kStructMemSize) return alignUp(memOff, maxAlign);
+  if (op == kStructCheck) return kOk;
+  return wireOff;  // kStructWireSize, kStructToWire; ignored for kStructFromWire, kStructWireRange
 }
 
 uint16_t ValueType::wireSize() const {
   if (uses(kUsesLists) && isListCode(code)) return (uint16_t)(1 + count * scalarSize(elementOf(code)));
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(1 + count);
-  if (uses(kUsesStructs) && code == kStruct) return structs(kStructWireSize, layout, nullptr, nullptr, 0);
+  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructWireSize, layout, nullptr, nullptr, 0);
   return (uint16_t)(scalarSize(code) * (count ? count : 1));
 }
 
@@ -214,7 +110,7 @@ uint16_t ValueType::memSize() const {
     return alignUp((uint16_t)(a + count * scalarSize(elementOf(code))), a);
   }
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(count + 1);  // NUL-terminated char array
-  if (uses(kUsesStructs) && code == kStruct) return structs(kStructMemSize, layout, nullptr, nullptr, 0);
+  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructMemSize, layout, nullptr, nullptr, 0);
   return wireSize();
 }
 
@@ -233,7 +129,7 @@ uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
     memcpy(wire + 1, m, n);
     return (uint16_t)(n + 1);
   }
-  if (uses(kUsesStructs) && code == kStruct) return structs(kStructToWire, layout, mem, wire, 0);
+  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructToWire, layout, mem, wire, 0);
   uint16_t n = wireSize();
   memcpy(wire, m, n);
   return n;
@@ -251,7 +147,7 @@ ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
     if (wire[0] > count) return kErrBadValue;
     return len == 1u + wire[0] ? kOk : kErrBadLength;
   }
-  if (uses(kUsesStructs) && code == kStruct) return (ErrorCode)structs(kStructCheck, layout, wire, nullptr, len);
+  if (uses(kUsesStructs) && code == kStruct) return (ErrorCode)sketchStructCodec(kStructCheck, layout, wire, nullptr, len);
   if (len != wireSize()) return kErrBadLength;
   return boolsValid(code, wire, len) ? kOk : kErrBadValue;
 }
@@ -267,7 +163,7 @@ void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
     memcpy(m, wire + 1, wire[0]);
     m[wire[0]] = 0;
   } else if (uses(kUsesStructs) && code == kStruct) {
-    structs(kStructFromWire, layout, wire, mem, len);
+    sketchStructCodec(kStructFromWire, layout, wire, mem, len);
   } else {
     memcpy(m, wire, len);
   }
@@ -292,7 +188,7 @@ void ValueType::wireRange(const void* mem, uint16_t offset, uint8_t* out, uint16
   if (n == 0) return;
   if (uses(kUsesStructs) && code == kStruct) {
     StructWindow w = {mem, offset};
-    structs(kStructWireRange, layout, &w, out, n);
+    sketchStructCodec(kStructWireRange, layout, &w, out, n);
     return;
   }
   bool counted = (uses(kUsesLists) && isListCode(code)) || (uses(kUsesStrings) && code == kStr);

@@ -22,7 +22,7 @@ enum TypeCode : uint8_t {
   kF32,
   kF64,
   kStr,     // bounded string: count = capacity
-  kStruct,  // fields described by a layout text, e.g. "ax:f32,gyro:i16[3]"
+  kStruct,  // fields described by a layout, e.g. "ax:f32,gyro:i16[3]" (its compiled form below)
   kTypeCount
 };
 
@@ -77,46 +77,32 @@ struct TypeOf<double> {
   static const TypeCode code = (sizeof(double) == 8) ? kF64 : kF32;
 };
 
-// Walks a struct layout text "name:type[count],...". Returns false at the end or on a syntax error
-// (then ok is false).
-struct LayoutField {
-  uint16_t nameStart, nameLen;
-  TypeCode code;
-  uint8_t count;  // 0 = scalar
-};
-class LayoutReader {
- public:
-  explicit LayoutReader(Text t) : ok(true), text_(t), pos_(0) {}
-  bool next(LayoutField& f);
-  bool ok;
-
- private:
-  Text text_;
-  uint16_t pos_;
-};
-
-// Struct values are handled only through one function, which the struct form of Device::expose()
-// refers to: a sketch that declares no struct links none of it (about 1 KB of flash on AVR). One
-// function rather than a table of them, because AVR keeps such tables in RAM.
+// Struct values are handled only through one function, called only where the sketch's features
+// (features.h) include structs: a sketch that declares none links none of it. One function rather
+// than a table of them, because AVR keeps such tables in RAM.
 enum StructOp : uint8_t { kStructWireSize, kStructMemSize, kStructToWire, kStructCheck, kStructFromWire };
-// One more op, outside the enum so that the codec's switch stays as it was for sketches without
-// large values: in = a StructWindow, out = wire bytes window.offset .. + len.
+// One more op, reached only in sketches with large values (the codec folds it away in others):
+// in = a StructWindow, out = wire bytes window.offset .. + len.
 const StructOp kStructWireRange = (StructOp)5;
 struct StructWindow {
   const void* mem;
   uint16_t offset;
 };
 // kStructToWire: in = memory, out = wire. kStructCheck: in = wire, len. kStructFromWire: in = wire,
-// out = memory.
-typedef uint16_t (*StructCodec)(StructOp op, Text layout, const void* in, void* out, uint16_t len);
-uint16_t structCodec(StructOp op, Text layout, const void* in, void* out, uint16_t len);
+// out = memory. layout is the compiled layout: per field its type code and element count, then
+// kVoid ("ax:f32,gyro:i16[3]" is {kF32, 1, kI16, 3, kVoid}; channels/layout.h makes it).
+uint16_t structCodec(StructOp op, const char* layout, const void* in, void* out, uint16_t len);
+typedef uint16_t (*StructCodec)(StructOp op, const char* layout, const void* in, void* out, uint16_t len);
+// &structCodec where the sketch declares a struct, else nullptr (HUBWIRE_CHANNELS defines it; with
+// HUBWIRE_ALL_FEATURES, features.cpp): the value code calls the codec through it, so that a sketch
+// without structs refers to none of it, and the linker drops it.
+extern const StructCodec sketchStructCodec;
 
 // A channel's value type as stored: scalar, fixed array (count > 0), string or struct.
 struct ValueType {
   TypeCode code;
   uint8_t count;                // array elements (0 = a single scalar), or string capacity
-  Text layout;                  // struct fields
-  StructCodec structs;          // kStruct only: structCodec
+  const char* layout;           // kStruct only: its fields, compiled (structCodec), in flash
 
   // Bytes of the value on the wire; for a string, its largest encoding (1 + capacity).
   uint16_t wireSize() const;
