@@ -29,6 +29,7 @@ from ..transport import Transport
 from ..wire import messages as m
 from ..wire.frame import Frame, FrameDecoder, encode_frame
 from .fragments import Reassembler, accepted, encode_message
+from .pacer import Pacer
 from .records import Stats
 
 __all__ = ["Link", "HelloOutcome", "HELLO_INTERVAL", "HUB_MAX_PAYLOAD"]
@@ -76,6 +77,8 @@ class Link:
                  heartbeat_ms: int, owner: Any) -> None:
         self.transport = transport
         self.loop = loop
+        #: every write goes through it: a large message's fragments are paced on a fast line
+        self.pacer = Pacer(transport, loop)
         self.stats = stats
         self.heartbeat_ms = heartbeat_ms
         self.owner = owner
@@ -128,14 +131,15 @@ class Link:
         for t in (self._hello_timer, self._hb_timer, self._loss_timer, self._reopen_timer):
             if t is not None:
                 t.cancel()
+        self.pacer.close()
         self.transport.close()
 
     def send(self, data: bytes) -> None:
-        self.transport.write(data)
+        self.pacer.write(data)
 
     def send_frame(self, type: int, seq: int, id: int, payload: bytes = b"") -> None:
         """Send one message: one frame, or its fragments when the device cannot take it in one."""
-        self.transport.write(self.encode(type, seq, id, payload))
+        self.pacer.write(self.encode(type, seq, id, payload))
 
     def peer_limit(self) -> int:
         """The largest payload the device accepts in one frame (its hello's, within 16..255)."""

@@ -204,12 +204,12 @@ class Transactions:
         p.tries += 1
         p.sent_at = time.monotonic()
         if p.wire.count(0) > 1:  # fragments: the retry timeout runs from when the last one is out on the line
-            p.sent_at += self._line_time(len(p.wire))
+            p.sent_at += self._line_time(p.wire)
         self.core.link.send(p.wire)
 
-    def _line_time(self, n: int) -> float:
-        baud = getattr(self.core.link.transport, "baudrate", 0) or DEFAULT_BAUD
-        return n * 10.0 / baud
+    def _line_time(self, wire: bytes) -> float:
+        """Seconds until the last byte of ``wire`` is out (paced on a fast line: session/pacer.py)."""
+        return self.core.link.pacer.burst_time(wire) or len(wire) * 10.0 / DEFAULT_BAUD
 
     def retry(self, p: Pending) -> None:
         with self.lock:

@@ -41,6 +41,11 @@ class WrappingTransport(Transport):
     def is_open(self) -> bool:
         return self.inner.is_open
 
+    @property
+    def baudrate(self) -> int:
+        """The inner transport's line rate (0: unknown), which the hub paces large messages by."""
+        return int(getattr(self.inner, "baudrate", 0) or 0)
+
 
 class TapTransport(WrappingTransport):
     """Pause or filter what the hub sends and receives, and record when the transport is opened.
