@@ -79,8 +79,10 @@ def timed(ops: Dict[str, Callable[[int], Any]], n: int, fails: Dict[str, int],
     return out
 
 
-def on_uno(link: str, n: int) -> Dict[str, Any]:
-    dev = hubwire.connect(transport=tapped(link), cache_dir=tempfile.mkdtemp(prefix="hubwire-bench-cache-"))
+def on_uno(link: str, baud: int, n: int) -> Dict[str, Any]:
+    # the hub is told the line's rate, as a program opening a real port at that rate does: above 250
+    # kbaud it paces the fragments it sends (host/hubwire/session/pacer.py)
+    dev = hubwire.connect(transport=tapped(link, baud), cache_dir=tempfile.mkdtemp(prefix="hubwire-bench-cache-"))
     try:
         assert dev.session.device_hello.max_payload == 32
         prof = codec_for(PROFILE)
@@ -132,7 +134,7 @@ def main() -> None:
         link = tmp_link(f"large{baud}{len(runs)}")
         with simuno(elf, link):
             time.sleep(0.5)
-            runs[label] = on_uno(link, a.n)
+            runs[label] = on_uno(link, baud, a.n)
     link = tmp_link("large-emu")
     with Child([LARGE_EMULATOR, "--link", link], link):
         runs["emulator (no UART)"] = on_emulator(link, a.n)
@@ -182,9 +184,11 @@ A full Uno fragment is a 39-byte frame (32-byte payload). Row 2, region 18 (an `
 the receive path, nothing dispatched) costs {c18:,.0f} cycles = {c18 / 39:.0f} cycles per byte before the
 Arduino core's RX interrupt (not counted there); at 1,000,000 baud a byte arrives every 160 cycles (176 in
 simavr, which counts 11 bits). A single frame fits the core's 64-byte receive ring whatever the speed;
-8 fragments back to back (276 bytes) do not when the receive path is slower than the line, so one lost
-byte abandons the whole write (12.4) and every retry meets the same burst. The third Uno above is the
-same sketch built with `-DSERIAL_RX_BUFFER_SIZE=256` (the core's ring, +192 B of SRAM): the burst fits.
+8 fragments back to back (276 bytes) do not when the receive path is slower than the line: one lost
+byte would abandon the whole write (12.4) and every retry would meet the same burst. So above 250 kbaud
+the hub leaves a fragment's time between the fragments it sends (PROTOCOL.md 12.3; unpaced, every
+200 B write at 1 Mbaud went unanswered). The third Uno above is the same sketch built with
+`-DSERIAL_RX_BUFFER_SIZE=256` (the core's ring, +192 B of SRAM), paced as well.
 """
     rows = []
     for k, name in (("simuno 115200", "115200"), ("simuno 1000000", "1 Mbaud"),
