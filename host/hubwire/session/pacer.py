@@ -36,7 +36,7 @@ class Pacer:
         self.transport = transport
         self.loop = loop
         self._lock = threading.Lock()
-        self._queue: List[bytes] = []  # frames still to go out, in order
+        self._queue: List[bytes] = []  # frames still to go out, one item each, in order
         self._busy = False  # a paced burst is going out: writes queue behind it
         self._timer: Optional[asyncio.TimerHandle] = None
         #: large messages sent paced (for tests and diagnostics)
@@ -60,7 +60,7 @@ class Pacer:
         """Send ``data`` (any thread): now, or after the paced burst in progress."""
         with self._lock:
             if self._busy:
-                self._queue.append(data)
+                self._queue.extend(split_frames(data))
                 return
             if not self.pacing(data):
                 self.transport.write(data)
@@ -81,9 +81,6 @@ class Pacer:
                 self._busy = False
                 return
             frame = self._queue.pop(0)
-            if frame.count(0) > 1:  # a whole paced message queued behind this burst
-                rest = split_frames(frame)
-                frame, self._queue = rest[0], rest[1:] + self._queue
             self.transport.write(frame)
             self._timer = self.loop.call_later(len(frame) * 10.0 / self.baud, self._next)
 
