@@ -287,7 +287,7 @@ class Session : private SessionState {
 
   Port& port_;
   // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.
-  FrameWriter tx() { return FrameWriter(frameBuf_); }
+  BasicFrameWriter<HUBWIRE_MAX_PAYLOAD> tx() { return BasicFrameWriter<HUBWIRE_MAX_PAYLOAD>(frameBuf_); }
 };
 
 }  // namespace hubwire

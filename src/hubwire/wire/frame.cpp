@@ -58,7 +58,8 @@ bool FrameReceiver::feedSlow(uint8_t byte) {
   return false;
 }
 
-void FrameWriter::sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
+template <bool kLongBlocks>
+void sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
   uint8_t* raw = buf + 1;
   raw[0] = type;
   raw[1] = seq;
@@ -72,7 +73,7 @@ void FrameWriter::sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, 
   uint8_t* end = raw + n + 2;
   uint8_t run = 1;
   for (uint8_t* p = raw; p != end; ++p, ++run) {
-    if (run == 0xFF) {  // 254 data bytes: a full block, no implied zero; the next block's code
+    if (kLongBlocks && run == 0xFF) {  // 254 data bytes: a full block, no implied zero; the next block's code
       *code = 0xFF;     // goes where its last byte was, once that is written
       portWrite(out, from, (size_t)(p - from));
       from = code = p - 1;
@@ -88,6 +89,9 @@ void FrameWriter::sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, 
   *end = 0;  // the delimiter
   portWrite(out, from, (size_t)(end + 1 - from));
 }
+
+template void sendFrame<true>(Port&, uint8_t*, uint8_t, uint8_t, uint8_t, uint8_t);
+template void sendFrame<false>(Port&, uint8_t*, uint8_t, uint8_t, uint8_t, uint8_t);
 
 size_t encodeFrame(uint8_t type, uint8_t seq, uint8_t id, const uint8_t* payload, uint8_t len, uint8_t* out) {
   uint8_t raw[HUBWIRE_RAW_FRAME_SIZE(kProtocolMaxPayload)];

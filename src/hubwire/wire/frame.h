@@ -87,28 +87,35 @@ class FrameReceiver {
   uint8_t frameLen_;     // payload length of the last completed frame
 };
 
+// Header, CRC and COBS in place in buf (see FrameWriter), then one write of the frame (two past
+// 254 bytes). kLongBlocks: frames of 255 raw bytes and more need a COBS block without an implied
+// zero (code 0xFF); a writer whose payloads stay below 250 bytes leaves that case out.
+template <bool kLongBlocks>
+void sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
+
 // Builds frames in a fixed buffer and writes them COBS-encoded to a stream. The encoding is done
 // in the buffer itself (each zero becomes the code byte of the block it ends), so a frame goes out
 // in one write (two past 254 bytes) without a copy; send() leaves the buffer's contents undefined.
-class FrameWriter {
+// kMaxPayload: the longest payload it sends (the session's is HUBWIRE_MAX_PAYLOAD).
+template <uint16_t kMaxPayload = kProtocolMaxPayload>
+class BasicFrameWriter {
  public:
-  // buffer: HUBWIRE_SEND_FRAME_SIZE(largest payload sent) bytes. A receiver may share it from
-  // buffer + 1 on: its frame's payload is then where this writer's goes.
-  explicit FrameWriter(uint8_t* buffer) : buf_(buffer) {}
+  // buffer: HUBWIRE_SEND_FRAME_SIZE(kMaxPayload) bytes. A receiver may share it from buffer + 1
+  // on: its frame's payload is then where this writer's goes.
+  explicit BasicFrameWriter(uint8_t* buffer) : buf_(buffer) {}
   // Where the payload goes.
   uint8_t* payload() { return buf_ + 1 + kFrameHeader; }
   // Wire bytes a frame with this payload length takes at most (COBS code bytes and delimiter).
   static size_t wireSize(size_t len) { return len + kFrameOverhead + (len + kFrameOverhead) / 254 + 2; }
   // Adds header and CRC to the len payload bytes already in payload(), and sends the frame.
   void send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
-    sendFrame(out, buf_, type, seq, id, len);
+    sendFrame<(kMaxPayload + kFrameOverhead >= 0xFE)>(out, buf_, type, seq, id, len);
   }
-  // The same, for a writer's buffer (a free function: callers need not keep a writer).
-  static void sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len);
 
  private:
   uint8_t* buf_;
 };
+typedef BasicFrameWriter<> FrameWriter;
 
 // Encodes a whole frame into out (room for FrameWriter::wireSize(len)); returns bytes written,
 // delimiter included. For tests and tools; the device sends with FrameWriter.
