@@ -169,7 +169,8 @@ void Session::handle(const Frame& f) {
   bool control = f.type == kMsgControl;
   if (control && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
     // a retried control: answer again, do not apply twice
-    memcpy(tx().payload(), replyData_, replyLen_);
+    // Without returns an answer is an ACK or a NAK's code: one byte to keep, copied whole.
+    memcpy(tx().payload(), replyData_, uses(kUsesReturns) ? replyLen_ : 1);
     return reply(replyType_, f, replyLen_);
   }
   lastTxnValid_ = true;
@@ -328,7 +329,7 @@ void Session::onControl(const Frame& f) {
   if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
-  memcpy(replyData_, tx().payload(), len);
+  memcpy(replyData_, tx().payload(), uses(kUsesReturns) ? len : 1);
   reply(type, f, len);
 }
 
