@@ -18,9 +18,11 @@ namespace {
 int16_t duty;
 int dutyChanges, lostAt;
 int16_t dutySeen;
+FakeClock* slowClock;  // set: onChange takes 20 ms, as driving real hardware may
 void dutyChanged() {
   ++dutyChanges;
   dutySeen = duty;  // what a motor driven from onChange would be given
+  if (slowClock) slowClock->now += 20;
 }
 void probeLost() { lostAt = dutyChanges; }
 
@@ -35,6 +37,7 @@ struct Probe {
   Probe() {
     duty = 0;
     dutyChanges = lostAt = dutySeen = 0;
+    slowClock = nullptr;
     device.onLinkLost(probeLost);
     EXPECT_TRUE(device.begin(probe, 7));
   }
@@ -82,6 +85,26 @@ TEST(FailsafeOnChange, RunsWithTheFailsafeValueStoredBeforeTheLinkLostHook) {
   p.clock.now += 5000;     // once per link loss, not once per update()
   p.device.update();
   EXPECT_EQ(dutyChanges, 2);
+}
+
+// After a loss the device announces itself once per second (PROTOCOL.md 3, rule 3), counted from
+// the update() that found the hub silent, even when the failsafes take time.
+TEST(FailsafeOnChange, AnnouncementFollowsOneIntervalAfterTheLossEvenWhenFailsafesTakeTime) {
+  Probe p;
+  p.hello();
+  slowClock = &p.clock;
+  p.clock.now += 1000;  // silence for the whole timeout
+  uint32_t lostAt = p.clock.now;
+  p.device.update();
+  ASSERT_FALSE(p.device.linked());
+  EXPECT_EQ(p.clock.now, lostAt + 20);  // the failsafe's onChange took its time
+  EXPECT_TRUE(p.sentHello().empty());   // not at once
+  p.clock.now = lostAt + HUBWIRE_ANNOUNCE_MS - 1;
+  p.device.update();
+  EXPECT_TRUE(p.sentHello().empty());
+  p.clock.now = lostAt + HUBWIRE_ANNOUNCE_MS;
+  p.device.update();
+  EXPECT_FALSE(p.sentHello().empty());
 }
 
 // The rule is a hub write's: a write of the value the variable already holds calls onChange too, and

@@ -120,7 +120,10 @@ void Session::update() {
   }
   uint16_t now = ms();
   if (i) lastByte_ = now;
-  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) loseLink();
+  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) {
+    loseLink();
+    lastSent_ = now;  // the announcements follow from here: the clock read now may be later
+  }
   // Frames are received and sent in one buffer. Answers are sent while no frame is arriving; a
   // frame of our own waits for one that is half here, unless that one has stalled (a hub that
   // died mid-frame), which is then dropped and counted.
@@ -237,7 +240,6 @@ void Session::loseLink() {
 #if HUBWIRE_MAX_STREAMS > 0
   if (uses(kUsesStreams)) streams_.clear();
 #endif
-  lastSent_ = ms();
   if (onLinkLost_) onLinkLost_();
 }
 
