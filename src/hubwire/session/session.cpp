@@ -95,14 +95,16 @@ void Session::applyFailsafes() {
 }
 
 // Drawn once per boot, at the first hub hello (or the first announcement if none came first):
-// the per-boot seed, the microsecond clock (its fast bits moved up, away from a boot counter's),
-// and the hub's random nonce, which differs for every connection even where a simulated or freshly
-// powered board repeats everything else. Mixing by xor is enough: any one part differing makes the
-// nonce differ, and the hub needs no more than that (docs/PROTOCOL.md 4).
-void Session::drawNonce(uint32_t hubNonce) {
+// the per-boot seed, the fast clock (its fast bits reversed into the top byte, away from a boot
+// counter's) and the hub's random nonce, which differs for every connection even where a simulated
+// or freshly powered board repeats everything else. Mixing by xor, byte by byte, is enough: any one
+// part differing makes the nonce differ, and the hub needs no more than that (docs/PROTOCOL.md 4).
+void Session::drawNonce(const uint8_t* hubNonce) {
   uint32_t t = portMicros(port_);
-  uint32_t h = nonce_ ^ hubNonce ^ ((t << 16) | (t >> 16));
-  nonce_ = h ? h : 1;  // never 0: the protocol reserves it
+  uint8_t* n = (uint8_t*)&nonce_;
+  uint8_t any = 0;
+  for (uint8_t i = 4; i--; t >>= 8) any |= n[i] ^= (uint8_t)(hubNonce[i] ^ (uint8_t)t);
+  if (!any) n[0] = 1;  // never 0: the protocol reserves it
   nonceDrawn_ = true;
 }
 
@@ -201,7 +203,7 @@ void Session::onHello(const Frame& f) {
   uint32_t nonce = loadU32(p + 2);
   uint16_t max = loadU16(p + 6);
   uint16_t beat = loadU16(p + 8);
-  if (!nonceDrawn_) drawNonce(nonce);
+  if (!nonceDrawn_) drawNonce(p + 2);
   bool fromHub = version == kProtocolVersion && !(flags & kHelloDevice);
   // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap. Known
   // before the answer, which carries the digest only if this hub accepts it.
@@ -389,7 +391,7 @@ void Session::sendEvent(uint16_t now) {
 }
 
 void Session::sendHello(bool isReply) {
-  if (!nonceDrawn_) drawNonce(0);
+  if (!nonceDrawn_) drawNonce((const uint8_t*)&hubNonce_);  // no hub heard this boot: 0, or any earlier hub's
   uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));

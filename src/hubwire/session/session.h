@@ -276,7 +276,7 @@ class Session : private SessionState {
   void newHubSession(uint32_t nonce);
   void loseLink();
   void sendHello(bool reply);
-  HUBWIRE_NOINLINE void drawNonce(uint32_t hubNonce);  // two callers: one copy
+  HUBWIRE_NOINLINE void drawNonce(const uint8_t* hubNonce);  // two callers: one copy
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
