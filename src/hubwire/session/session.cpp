@@ -136,7 +136,7 @@ void Session::update() {
   if (!linked_) {
     if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
       lastSent_ = now;
-      sendHello(false);
+      sendHello(kHelloDevice);
     }
     return;
   }
@@ -150,7 +150,7 @@ void Session::handle(const Frame& f) {
     case kMsgHello:
       return onHello(f);
     case kMsgHeartbeat:
-      if (!linked_) return sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      if (!linked_) return sendHello(kHelloDevice);  // the hub thinks we are linked: invite it to handshake again
       hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
@@ -208,7 +208,7 @@ void Session::onHello(const Frame& f) {
   // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap. Known
   // before the answer, which carries the digest only if this hub accepts it.
   if (fromHub) peerMax_ = (uint8_t)(max > HUBWIRE_MAX_PAYLOAD ? HUBWIRE_MAX_PAYLOAD : max < kHelloSize ? kHelloSize : max);
-  if (!(flags & kHelloReply)) sendHello(true);
+  if (!(flags & kHelloReply)) sendHello(kHelloDevice | kHelloReply);
   if (!fromHub) return;  // the hub reports the mismatch
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
   // Times are 16-bit milliseconds: the timeout must stay below 65.5 s.
@@ -390,11 +390,11 @@ void Session::sendEvent(uint16_t now) {
   tx().send(port_, kMsgEvent, events_.seq(), e.id, e.len);
 }
 
-void Session::sendHello(bool isReply) {
+void Session::sendHello(uint8_t flags) {
   if (!nonceDrawn_) drawNonce((const uint8_t*)&hubNonce_);  // no hub heard this boot: 0, or any earlier hub's
   uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
-  p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
+  p[1] = (uint8_t)(flags | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
   // Multi-byte fields are copied as they are in memory: that is their wire form (config.h).
   memcpy(p + 2, &nonce_, 4);
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);

@@ -275,7 +275,7 @@ class Session : private SessionState {
   void onAck(const Frame& f, bool nak);
   void newHubSession(uint32_t nonce);
   void loseLink();
-  void sendHello(bool reply);
+  void sendHello(uint8_t flags);  // kHelloDevice, and kHelloReply for an answer
   HUBWIRE_NOINLINE void drawNonce(const uint8_t* hubNonce);  // two callers: one copy
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
