@@ -122,7 +122,7 @@ void Session::update() {
   }
   uint16_t now = ms();
   if (i) lastByte_ = now;
-  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) loseLink();
+  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) loseLink(now);
   // Frames are received and sent in one buffer. Answers are sent while no frame is arriving; a
   // frame of our own waits for one that is half here, unless that one has stalled (a hub that
   // died mid-frame), which is then dropped and counted.
@@ -232,13 +232,13 @@ void Session::newHubSession(uint32_t nonce) {
 #endif
 }
 
-void Session::loseLink() {
+void Session::loseLink(uint16_t now) {
   linked_ = false;
   applyFailsafes();
 #if HUBWIRE_MAX_STREAMS > 0
   if (uses(kUsesStreams)) streams_.clear();
 #endif
-  lastSent_ = ms();
+  lastSent_ = now;  // the next announcement one interval after the loss
   if (onLinkLost_) onLinkLost_();
 }
 

@@ -274,7 +274,7 @@ class Session : private SessionState {
   void onSubscribe(const Frame& f);
   void onAck(const Frame& f, bool nak);
   void newHubSession(uint32_t nonce);
-  void loseLink();
+  void loseLink(uint16_t now);
   void sendHello(uint8_t flags);  // kHelloDevice, and kHelloReply for an answer
   HUBWIRE_NOINLINE void drawNonce(const uint8_t* hubNonce);  // two callers: one copy
   void sendHeartbeat(uint16_t now);
