@@ -411,7 +411,9 @@ void Session::sendHeartbeat(uint16_t now) {
   uint8_t* p = tx().payload();
   ++beatCounter_;
   storeU16(p, beatCounter_);
-  storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastSent_) : 0);
+  uint16_t since = (uint16_t)(now - lastSent_);  // then cleared: smaller than a conditional
+  if (!beatSent_) since = 0;  // the first since the link came up
+  storeU16(p + 2, since);
   static_assert(sizeof(LinkCounters) == 6, "crc, overflow, dropped: the heartbeat's order");
   memcpy(p + 4, &rx_.counters, 6);
   tx().send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
