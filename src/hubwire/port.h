@@ -22,7 +22,8 @@ void portWrite(Port& port, const uint8_t* data, size_t len);
 size_t portWritable(Port& port);
 // Milliseconds since some fixed point; wraps at 2^32.
 uint32_t portMillis(Port& port);
-// Microseconds, for entropy only (when the hub is first heard varies from boot to boot).
+// Microseconds, or any count that runs as fast, for entropy only (when the hub is first heard
+// varies from boot to boot).
 uint32_t portMicros(Port& port);
 // This board's id, which tells two boards running the same sketch apart (PROTOCOL 3.4, `R` id 0):
 // writes 1..16 bytes to out and returns how many, or returns 0 when the board has none.

@@ -95,14 +95,16 @@ void Session::applyFailsafes() {
 }
 
 // Drawn once per boot, at the first hub hello (or the first announcement if none came first):
-// the per-boot seed, the microsecond clock (its fast bits moved up, away from a boot counter's),
-// and the hub's random nonce, which differs for every connection even where a simulated or freshly
-// powered board repeats everything else. Mixing by xor is enough: any one part differing makes the
-// nonce differ, and the hub needs no more than that (docs/PROTOCOL.md 4).
-void Session::drawNonce(uint32_t hubNonce) {
+// the per-boot seed, the fast clock (its fast bits reversed into the top byte, away from a boot
+// counter's) and the hub's random nonce, which differs for every connection even where a simulated
+// or freshly powered board repeats everything else. Mixing by xor, byte by byte, is enough: any one
+// part differing makes the nonce differ, and the hub needs no more than that (docs/PROTOCOL.md 4).
+void Session::drawNonce(const uint8_t* hubNonce) {
   uint32_t t = portMicros(port_);
-  uint32_t h = nonce_ ^ hubNonce ^ ((t << 16) | (t >> 16));
-  nonce_ = h ? h : 1;  // never 0: the protocol reserves it
+  uint8_t* n = (uint8_t*)&nonce_;
+  uint8_t any = 0;
+  for (uint8_t i = 4; i--; t >>= 8) any |= n[i] ^= (uint8_t)(hubNonce[i] ^ (uint8_t)t);
+  if (!any) n[0] = 1;  // never 0: the protocol reserves it
   nonceDrawn_ = true;
 }
 
@@ -120,10 +122,7 @@ void Session::update() {
   }
   uint16_t now = ms();
   if (i) lastByte_ = now;
-  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) {
-    loseLink();
-    lastSent_ = now;  // the announcements follow from here: the clock read now may be later
-  }
+  if (linked_ && (uint16_t)(now - lastRx_) >= lostAfterMs_) loseLink(now);
   // Frames are received and sent in one buffer. Answers are sent while no frame is arriving; a
   // frame of our own waits for one that is half here, unless that one has stalled (a hub that
   // died mid-frame), which is then dropped and counted.
@@ -137,7 +136,7 @@ void Session::update() {
   if (!linked_) {
     if ((uint16_t)(now - lastSent_) >= HUBWIRE_ANNOUNCE_MS) {
       lastSent_ = now;
-      sendHello(false);
+      sendHello(kHelloDevice);
     }
     return;
   }
@@ -151,7 +150,7 @@ void Session::handle(const Frame& f) {
     case kMsgHello:
       return onHello(f);
     case kMsgHeartbeat:
-      if (!linked_) return sendHello(false);  // the hub thinks we are linked: invite it to handshake again
+      if (!linked_) return sendHello(kHelloDevice);  // the hub thinks we are linked: invite it to handshake again
       hubHook(*this, true);  // the hub link notes the hub's health (hub_link.cpp)
       return;
     case kMsgAck:
@@ -205,12 +204,12 @@ void Session::onHello(const Frame& f) {
   uint32_t nonce = loadU32(p + 2);
   uint16_t max = loadU16(p + 6);
   uint16_t beat = loadU16(p + 8);
-  if (!nonceDrawn_) drawNonce(nonce);
+  if (!nonceDrawn_) drawNonce(p + 2);
   bool fromHub = version == kProtocolVersion && !(flags & kHelloDevice);
   // A peer takes at least a hello (16 bytes); smaller claims would make chunk sizes wrap. Known
   // before the answer, which carries the digest only if this hub accepts it.
   if (fromHub) peerMax_ = (uint8_t)(max > HUBWIRE_MAX_PAYLOAD ? HUBWIRE_MAX_PAYLOAD : max < kHelloSize ? kHelloSize : max);
-  if (!(flags & kHelloReply)) sendHello(true);
+  if (!(flags & kHelloReply)) sendHello(kHelloDevice | kHelloReply);
   if (!fromHub) return;  // the hub reports the mismatch
   if (!hubKnown_ || nonce != hubNonce_) newHubSession(nonce);
   // Times are 16-bit milliseconds: the timeout must stay below 65.5 s.
@@ -234,12 +233,13 @@ void Session::newHubSession(uint32_t nonce) {
 #endif
 }
 
-void Session::loseLink() {
+void Session::loseLink(uint16_t now) {
   linked_ = false;
   applyFailsafes();
 #if HUBWIRE_MAX_STREAMS > 0
   if (uses(kUsesStreams)) streams_.clear();
 #endif
+  lastSent_ = now;  // the next announcement one interval after the loss
   if (onLinkLost_) onLinkLost_();
 }
 
@@ -391,11 +391,11 @@ void Session::sendEvent(uint16_t now) {
   tx().send(port_, kMsgEvent, events_.seq(), e.id, e.len);
 }
 
-void Session::sendHello(bool isReply) {
-  if (!nonceDrawn_) drawNonce(0);
+void Session::sendHello(uint8_t flags) {
+  if (!nonceDrawn_) drawNonce((const uint8_t*)&hubNonce_);  // no hub heard this boot: 0, or any earlier hub's
   uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
-  p[1] = (uint8_t)(kHelloDevice | (isReply ? kHelloReply : 0) | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
+  p[1] = (uint8_t)(flags | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
   // Multi-byte fields are copied as they are in memory: that is their wire form (config.h).
   memcpy(p + 2, &nonce_, 4);
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
@@ -412,7 +412,9 @@ void Session::sendHeartbeat(uint16_t now) {
   uint8_t* p = tx().payload();
   ++beatCounter_;
   storeU16(p, beatCounter_);
-  storeU16(p + 2, beatSent_ ? (uint16_t)(now - lastSent_) : 0);
+  uint16_t since = (uint16_t)(now - lastSent_);  // then cleared: smaller than a conditional
+  if (!beatSent_) since = 0;  // the first since the link came up
+  storeU16(p + 2, since);
   static_assert(sizeof(LinkCounters) == 6, "crc, overflow, dropped: the heartbeat's order");
   memcpy(p + 4, &rx_.counters, 6);
   tx().send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);

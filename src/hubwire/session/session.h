@@ -274,9 +274,9 @@ class Session : private SessionState {
   void onSubscribe(const Frame& f);
   void onAck(const Frame& f, bool nak);
   void newHubSession(uint32_t nonce);
-  void loseLink();
-  void sendHello(bool reply);
-  HUBWIRE_NOINLINE void drawNonce(uint32_t hubNonce);  // two callers: one copy
+  void loseLink(uint16_t now);
+  void sendHello(uint8_t flags);  // kHelloDevice, and kHelloReply for an answer
+  HUBWIRE_NOINLINE void drawNonce(const uint8_t* hubNonce);  // two callers: one copy
   void sendHeartbeat(uint16_t now);
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
