@@ -41,7 +41,7 @@ bool Session::hubMine() {
   if (hubLink.owner == this) return true;
   HubTable t;
   readFlash(&t, hubTable(), sizeof(t));
-  if (!started_ || t.owner != table_.channels) return false;
+  if (!started_ || t.owner != table(&ChannelTable::channels)) return false;
   memset(&hubLink, 0, sizeof(hubLink));
   hubLink.owner = this;
   hubLink.channels = t.channels;
