@@ -77,8 +77,7 @@ bool Session::hubFrame(const Frame& f) {
       }
       return false;
     case kMsgChunk:  // an answer: counted as a hub transaction on its way here, which it is not
-      lastTxnValid_ = l.controlValid;
-      lastTxnControl_ = true;
+      lastTxnControl_ = l.controlValid;
       lastTxnSeq_ = l.controlSeq;
       lastTxnId_ = l.controlId;
       hubAnswer(f);

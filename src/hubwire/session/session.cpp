@@ -175,12 +175,11 @@ void Session::handle(const Frame& f) {
   }
   if (!linked_) return sendNak(f, kErrNotLinked);
   bool control = f.type == kMsgControl;
-  if (control && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
+  if (control && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
     // a retried control: answer again, do not apply twice
     memcpy(tx().payload(), replyData_, replyLen_);
     return reply(replyType_, f, replyLen_);
   }
-  lastTxnValid_ = true;
   lastTxnControl_ = control;
   lastTxnSeq_ = f.seq;
   lastTxnId_ = f.id;
@@ -232,7 +231,7 @@ void Session::onHello(const Frame& f) {
 void Session::newHubSession(uint32_t nonce) {
   hubKnown_ = true;
   hubNonce_ = nonce;
-  lastTxnValid_ = false;
+  lastTxnControl_ = false;
 #if HUBWIRE_MAX_STREAMS > 0
   if (uses(kUsesStreams)) streams_.clear();
 #endif

@@ -50,8 +50,7 @@ struct SessionState {
   bool linked_ : 1;
   bool hubKnown_ : 1;       // hubNonce_ is valid
   bool beatSent_ : 1;       // a heartbeat went out since the link came up
-  bool lastTxnValid_ : 1;   // duplicate suppression: lastTxn* describe a transaction
-  bool lastTxnControl_ : 1;  // ... which was a control
+  bool lastTxnControl_ : 1;  // duplicate suppression: lastTxn* describe a control
 
   // One buffer receives and sends frames: an answer is built where its question was (handlers
   // read the question first), and frames of our own wait until no frame is arriving. The writer
