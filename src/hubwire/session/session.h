@@ -44,13 +44,14 @@ struct Same {
 // Everything a Session changes while it runs, kept apart from its references so that one
 // value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
 struct SessionState {
-  // Flags, one bit each (SRAM is the Uno's scarcest resource).
-  bool nonceDrawn_ : 1;     // nonce_ is this boot's nonce (not yet: it holds the seed)
-  bool started_ : 1;        // begin() succeeded
-  bool linked_ : 1;
-  bool hubKnown_ : 1;       // hubNonce_ is valid
-  bool beatSent_ : 1;       // a heartbeat went out since the link came up
-  bool lastTxnControl_ : 1;  // duplicate suppression: lastTxn* describe a control
+  // Flags, a byte each: each read-modify-write of a bit cost more flash than the bytes they take
+  // (paid for by the table, no longer copied into RAM: table()).
+  bool nonceDrawn_;  // nonce_ is this boot's nonce (not yet: it holds the seed)
+  bool started_;  // begin() succeeded
+  bool linked_;
+  bool hubKnown_;  // hubNonce_ is valid
+  bool beatSent_;  // a heartbeat went out since the link came up
+  bool lastTxnControl_;  // duplicate suppression: lastTxn* describe a control
 
   // One buffer receives and sends frames: an answer is built where its question was (handlers
   // read the question first), and frames of our own wait until no frame is arriving. The writer
