@@ -53,6 +53,38 @@ TEST(Features, TheMacroDefinesTheSketchsFeatures) {
   EXPECT_FALSE(uses(kUsesStreams | kUsesEvents | kUsesFailsafes | kUsesStrings | kUsesStructs | kUsesReturns));
 }
 
+// ... and hubwire::sketchTable, the table as a constant the session reads in place of a copy.
+TEST(Features, TheMacroDefinesTheSketchsTable) {
+  EXPECT_EQ(sketchTableAt, &few);
+  EXPECT_EQ(sketchTable.json, few.json);
+  EXPECT_EQ(sketchTable.hash, few.hash);
+  EXPECT_EQ(sketchTable.jsonLength, few.jsonLength);
+  EXPECT_EQ(sketchTable.channels, few.channels);
+  EXPECT_EQ(sketchTable.count, 2);
+  Device d;
+  EXPECT_EQ(d.session.channelCount(), 2);
+  EXPECT_EQ(d.session.descriptorHash(), few.hash);
+  EXPECT_EQ(d.session.descriptorLength(), few.jsonLength);
+}
+
+// With one table in the program the session starts that one only: another (made by hand, as no
+// second HUBWIRE_CHANNELS can be) is refused, even with the same contents.
+TEST(Features, ATableOtherThanTheSketchsIsRefused) {
+  FakeStream stream;
+  FakeClock clock;
+  Port port(stream, clock);
+  hubwire::Session session(port);
+  const ChannelTable copy = few;
+  EXPECT_FALSE(session.begin(copy));
+  EXPECT_EQ(session.error(), kSetupNoDeclarations);
+  EXPECT_EQ(session.channelCount(), 0);
+  clock.now += HUBWIRE_ANNOUNCE_MS;
+  session.update();
+  EXPECT_TRUE(stream.out.empty());  // silent, as after any refused begin()
+  EXPECT_TRUE(session.begin(few));
+  EXPECT_EQ(session.error(), kSetupOk);
+}
+
 TEST(Features, UsedFeaturesWorkAsBefore) {
   Device d;
   ASSERT_TRUE(d.session.linked());

@@ -134,6 +134,9 @@ TEST(Tables, FeaturesOfTheDeclarations) {
   EXPECT_EQ(hubwire_channels_others::features, kUsesStrings | kUsesReads | kUsesStreams | kUsesCalls | kUsesReturns);
   // This program has several tables (HUBWIRE_ALL_FEATURES): the library's default holds.
   EXPECT_EQ(sketchFeatures, kAllFeatures);
+  // ... and no table of the sketch's own: the session reads the one begin() was given.
+  EXPECT_EQ(sketchTable.count, 0);
+  EXPECT_EQ(sketchTableAt, nullptr);
 }
 
 }  // namespace

@@ -218,10 +218,19 @@ struct ChannelInfo {
 struct ChannelTable {
   const char* json;  // in flash, just after the first kDigestSize bytes of its SHA-256
   uint32_t hash;  // FNV-1a of the JSON, worked out by the compiler as well
-  uint16_t jsonLength;  // just after hash: hello carries the two as they are in memory
+  uint16_t jsonLength;
   const ChannelInfo* channels;
   uint8_t count;
 };
+
+// The sketch's one table as a constant the whole program sees, and where its flash copy is (the
+// one begin() takes): HUBWIRE_CHANNELS defines both (declare.h), and with link-time optimisation
+// the session's reads of the table become immediates, so the table takes no RAM. A program with
+// several tables (HUBWIRE_ALL_FEATURES, features.h) gets the library's weak defaults, count 0
+// (features.cpp): there the session keeps a pointer to the table begin() was given. (count, not
+// json, tells the two apart: avr-gcc does not fold an address's test against null.)
+extern const ChannelTable sketchTable;
+extern const ChannelTable* const sketchTableAt;
 
 }  // namespace hubwire
 

@@ -31,7 +31,8 @@
 #endif
 
 /// Declares a sketch's channels at file scope, outside any namespace (it defines
-/// hubwire::sketchFeatures, features.h); `var` is then what begin() takes. After the device:
+/// hubwire::sketchFeatures, features.h, and hubwire::sketchTable, channel.h); `var` is then what
+/// begin() takes. After the device:
 /// expose(), control(), action() and event() (dsl.h), mission() (mission.h), with their options, and what the sketch
 /// expects of the hub: remote(), remoteAction() and remoteEvent() (remote.h).
 ///   HUBWIRE_CHANNELS(channels, "minimal", expose("blink_ms", blinkMs).writable(), event("button", button));
@@ -88,7 +89,8 @@
           ::hubwire::declare::anyMission(hubwire_channels_##var::declared.list)>::dispatch();)     \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>( \
-          hubwire_channels_##var::json, hubwire_channels_##var::infos)
+          hubwire_channels_##var::json, hubwire_channels_##var::infos);                           \
+  HUBWIRE_SKETCH_TABLE(var)
 
 // The fragments' hooks (session/fragments.h): set for a sketch with a large value, else for a
 // specialisation nothing reads. Type ends with const or *: clang would read `uint16_t ::X` as
@@ -99,21 +101,35 @@
                       ::HubwireHubTag<hubwire_channels_##var::large, hubwire_channels_##var::Tag>::type>::member \
       HUBWIRE_UNUSED = value;
 
-// The sketch's features, for the session to test (features.h), its struct codec (wire/values.h)
-// and the missions' hook (session/missions.h); none with HUBWIRE_ALL_FEATURES, whose programs
-// (several tables) get the library's defaults built with it: every feature, missions reachable
-// (session/mission_flag.cpp). The codec's user alignment keeps GCC's identical-constant folding
-// from merging a null codec with the library's null hooks: merged, the hooks were no longer folded
-// into the code that reads them (Missions: +28 B flash, +6 B SRAM).
+// The sketch's features, for the session to test (features.h), its struct codec (wire/values.h),
+// the missions' hook (session/missions.h) and its table (channel.h); none with
+// HUBWIRE_ALL_FEATURES, whose programs (several tables) get the library's defaults built with it:
+// every feature, missions reachable (session/mission_flag.cpp), no table of their own. The
+// codec's user alignment keeps GCC's identical-constant folding from merging a null codec with the
+// library's null hooks: merged, the hooks were no longer folded into the code that reads them
+// (Missions: +28 B flash, +6 B SRAM).
 #if defined(HUBWIRE_ALL_FEATURES)
 #define HUBWIRE_SKETCH_FEATURES(f)
 #define HUBWIRE_MISSIONS_HOOK(...)
+#define HUBWIRE_SKETCH_TABLE(var) static_assert(sizeof(var) != 0, "")
 #else
 #define HUBWIRE_SKETCH_FEATURES(f)                                                                 \
   const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;                                       \
   const ::hubwire::StructCodec hubwire::sketchStructCodec HUBWIRE_RODATA __attribute__((aligned(2))) = \
       ((f) & ::hubwire::kUsesStructs) ? &::hubwire::structCodec : nullptr;
 #define HUBWIRE_MISSIONS_HOOK(...) __VA_ARGS__
+// The sketch's table as a constant the session reads (channel.h), and the flash copy begin() takes.
+// On AVR the constant has a section of its own, which the linker drops once every read of it was
+// folded (in a section shared with a constant still read, it would stay in RAM); either way GCC's
+// identical-constant folding cannot merge it with its flash copy, whose reads are not folded.
+#if defined(__AVR__)
+#define HUBWIRE_SKETCH_TABLE_SECTION __attribute__((section(".rodata.hubwire_sketch_table")))
+#else
+#define HUBWIRE_SKETCH_TABLE_SECTION HUBWIRE_RODATA __attribute__((aligned(2)))
+#endif
+#define HUBWIRE_SKETCH_TABLE(var)                                                                  \
+  const ::hubwire::ChannelTable hubwire::sketchTable HUBWIRE_SKETCH_TABLE_SECTION = var;          \
+  const ::hubwire::ChannelTable* const hubwire::sketchTableAt HUBWIRE_RODATA = &var
 #endif
 
 #endif

@@ -41,7 +41,7 @@ bool Session::hubMine() {
   if (hubLink.owner == this) return true;
   HubTable t;
   readFlash(&t, hubTable(), sizeof(t));
-  if (!started_ || t.owner != table_.channels) return false;
+  if (!started_ || t.owner != table(&ChannelTable::channels)) return false;
   memset(&hubLink, 0, sizeof(hubLink));
   hubLink.owner = this;
   hubLink.channels = t.channels;
@@ -77,8 +77,7 @@ bool Session::hubFrame(const Frame& f) {
       }
       return false;
     case kMsgChunk:  // an answer: counted as a hub transaction on its way here, which it is not
-      lastTxnValid_ = l.controlValid;
-      lastTxnControl_ = true;
+      lastTxnControl_ = l.controlValid;
       lastTxnSeq_ = l.controlSeq;
       lastTxnId_ = l.controlId;
       hubAnswer(f);

@@ -146,8 +146,9 @@ void Session::missionPoll(uint16_t now) {
     l.linked = true;
   } else {
     l.linked = true;
-    for (uint8_t k = 0; l.pending && k < table_.count; ++k) {
-      uint8_t id = (uint8_t)((l.next + k) % table_.count + 1);
+    const uint8_t count = table(&ChannelTable::count);
+    for (uint8_t k = 0; l.pending && k < count; ++k) {
+      uint8_t id = (uint8_t)((l.next + k) % count + 1);
       ChannelInfo ch;
       find(id, ch);
       if (!(ch.access & kMissionAccess)) continue;

@@ -48,19 +48,26 @@ static ErrorCode listInRange(const ChannelLimits& lim, TypeCode code, const uint
 }
 
 bool Session::find(uint8_t id, ChannelInfo& ch) {
-  if (id == 0 || id > table_.count) return false;
-  fromFlash(&ch, &table_.channels[id - 1], sizeof(ch));
+  if (id == 0 || id > table(&ChannelTable::count)) return false;
+  fromFlash(&ch, &table(&ChannelTable::channels)[id - 1], sizeof(ch));
   return true;
 }
 
 bool Session::begin(const ChannelTable& channels, uint32_t seed) {
-  fromFlash(&table_, &channels, sizeof(table_));
   started_ = false;
-  if (table_.count == 0) return false;
+  // A program with one table starts that one only; one with several notes where it is.
+  if (sketchTable.count) {
+    if (&channels != sketchTableAt) return false;
+  } else {
+    table_ = &channels;
+  }
+  const uint8_t count = table(&ChannelTable::count);
+  if (count == 0) return false;
   // Events learn their ids: emit() names the event by its handle.
-  for (uint8_t id = 1; uses(kUsesEvents) && id <= table_.count; ++id) {
+  const ChannelInfo* record = table(&ChannelTable::channels);
+  for (uint8_t id = 1; uses(kUsesEvents) && id <= count; ++id, ++record) {
     ChannelInfo ch;
-    find(id, ch);
+    fromFlash(&ch, record, sizeof(ch));
     if (ch.access & kEventAccess) *(uint8_t*)ch.data = id;
   }
   nonce_ = seed;  // until drawNonce() mixes in the moment the hub is first heard
@@ -76,7 +83,8 @@ bool Session::begin(const ChannelTable& channels, uint32_t seed) {
 // is called with it. Either way: as if the hub had sent it.
 void Session::applyFailsafes() {
   if (!uses(kUsesFailsafes)) return;
-  for (uint8_t id = 1; id <= table_.count; ++id) {
+  const uint8_t count = table(&ChannelTable::count);
+  for (uint8_t id = 1; id <= count; ++id) {
     ChannelInfo ch;
     find(id, ch);
     if (!(ch.flags & kHasFailsafe)) continue;
@@ -169,13 +177,12 @@ void Session::handle(const Frame& f) {
   }
   if (!linked_) return sendNak(f, kErrNotLinked);
   bool control = f.type == kMsgControl;
-  if (control && lastTxnValid_ && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
+  if (control && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
     // a retried control: answer again, do not apply twice
     // Without returns an answer is an ACK or a NAK's code: one byte to keep, copied whole.
     memcpy(tx().payload(), replyData_, uses(kUsesReturns) ? replyLen_ : 1);
     return reply(replyType_, f, replyLen_);
   }
-  lastTxnValid_ = true;
   lastTxnControl_ = control;
   lastTxnSeq_ = f.seq;
   lastTxnId_ = f.id;
@@ -227,7 +234,7 @@ void Session::onHello(const Frame& f) {
 void Session::newHubSession(uint32_t nonce) {
   hubKnown_ = true;
   hubNonce_ = nonce;
-  lastTxnValid_ = false;
+  lastTxnControl_ = false;
 #if HUBWIRE_MAX_STREAMS > 0
   if (uses(kUsesStreams)) streams_.clear();
 #endif
@@ -257,14 +264,14 @@ void Session::onChunk(const Frame& f) {
   }
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
-  uint16_t total = table_.jsonLength;
+  uint16_t total = table(&ChannelTable::jsonLength);
   if (offset > total) return sendNak(f, kErrBadOffset);
   uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
   if (total - offset < n) n = (uint16_t)(total - offset);
   uint8_t* out = tx().payload();  // where the request is: its offset is already the answer's
   storeU16(out + 2, total);
-  fromFlash(out + kChunkHeader, table_.json + offset, n);
+  fromFlash(out + kChunkHeader, table(&ChannelTable::json) + offset, n);
   reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
 }
 
@@ -400,11 +407,12 @@ void Session::sendHello(uint8_t flags) {
   memcpy(p + 2, &nonce_, 4);
   storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
   storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
-  static_assert(offsetof(ChannelTable, jsonLength) == offsetof(ChannelTable, hash) + 4, "hash, then length");
-  memcpy(p + 10, &table_.hash, 6);
+  storeU32(p + 10, table(&ChannelTable::hash));
+  storeU16(p + 14, table(&ChannelTable::jsonLength));
   // The descriptor's digest (just before the JSON in flash), sent to a hub that accepts it: one
   // that accepts only 16 bytes gets the hello it knows.
-  if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd) fromFlash(p + kHelloSize, table_.json - kDigestSize, kDigestSize);
+  if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd)
+    fromFlash(p + kHelloSize, table(&ChannelTable::json) - kDigestSize, kDigestSize);
   tx().send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
 }
 

@@ -44,22 +44,22 @@ struct Same {
 // Everything a Session changes while it runs, kept apart from its references so that one
 // value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
 struct SessionState {
-  // Flags, one bit each (SRAM is the Uno's scarcest resource).
-  bool nonceDrawn_ : 1;     // nonce_ is this boot's nonce (not yet: it holds the seed)
-  bool started_ : 1;        // begin() succeeded
-  bool linked_ : 1;
-  bool hubKnown_ : 1;       // hubNonce_ is valid
-  bool beatSent_ : 1;       // a heartbeat went out since the link came up
-  bool lastTxnValid_ : 1;   // duplicate suppression: lastTxn* describe a transaction
-  bool lastTxnControl_ : 1;  // ... which was a control
+  // Flags, a byte each: each read-modify-write of a bit cost more flash than the bytes they take
+  // (paid for by the table, no longer copied into RAM: table()).
+  bool nonceDrawn_;  // nonce_ is this boot's nonce (not yet: it holds the seed)
+  bool started_;  // begin() succeeded
+  bool linked_;
+  bool hubKnown_;  // hubNonce_ is valid
+  bool beatSent_;  // a heartbeat went out since the link came up
+  bool lastTxnControl_;  // duplicate suppression: lastTxn* describe a control
 
   // One buffer receives and sends frames: an answer is built where its question was (handlers
   // read the question first), and frames of our own wait until no frame is arriving. The writer
   // encodes in place from its first byte on, the receiver uses the rest (frame.h).
   uint8_t frameBuf_[HUBWIRE_SEND_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD)];
 
-  // The sketch's channels (all in flash).
-  ChannelTable table_;
+  // The table begin() was given, read only in a program with several (table()).
+  const ChannelTable* table_;
 
   // Session.
   uint32_t nonce_, hubNonce_;  // nonce_ holds begin()'s seed until it is drawn
@@ -136,13 +136,13 @@ class Session : private SessionState {
   SetupError error() const { return started_ ? kSetupOk : kSetupNoDeclarations; }
   /// How many channels begin() was given.
   ///   uint8_t n = session.channelCount();
-  uint8_t channelCount() const { return table_.count; }
+  uint8_t channelCount() const { return started_ ? table(&ChannelTable::count) : 0; }
   /// The descriptor's length in bytes, as hello announces it.
   ///   uint16_t len = session.descriptorLength();
-  uint16_t descriptorLength() const { return table_.jsonLength; }
+  uint16_t descriptorLength() const { return started_ ? table(&ChannelTable::jsonLength) : 0; }
   /// The descriptor's FNV-1a hash, as hello announces it.
   ///   uint32_t h = session.descriptorHash();
-  uint32_t descriptorHash() const { return table_.hash; }
+  uint32_t descriptorHash() const { return started_ ? table(&ChannelTable::hash) : 0; }
   /// Events waiting for the hub's ACK.
   ///   if (session.eventsQueued() == HUBWIRE_EVENT_QUEUE) { /* full */ }
   uint8_t eventsQueued() const { return events_.size(); }
@@ -262,6 +262,19 @@ class Session : private SessionState {
   friend bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch,
                         const uint8_t* prefix, uint8_t prefixLen, bool room);
 
+  // A field of the table begin() took. In a program with one table, the sketch's constant
+  // (channel.h), which the compiler folds into the code; else read from flash where table_ points.
+  template <typename T>
+  HUBWIRE_ALWAYS_INLINE T table(T ChannelTable::*field) const {
+    if (sketchTable.count) return sketchTable.*field;
+    T v;
+#if defined(__AVR__)
+    memcpy_P(&v, &(table_->*field), sizeof(v));
+#else
+    v = table_->*field;
+#endif
+    return v;
+  }
   bool find(uint8_t id, ChannelInfo& ch);  // ch describes channel id afterwards
   void applyFailsafes();
   bool emitRaw(uint8_t id, const void* value, uint8_t size);
