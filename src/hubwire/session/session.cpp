@@ -80,16 +80,16 @@ void Session::applyFailsafes() {
     ChannelInfo ch;
     find(id, ch);
     if (!(ch.flags & kHasFailsafe)) continue;
-    ChannelLimits lim;
-    fromFlash(&lim, ch.limits, sizeof(lim));
+    Scalar fs;
+    fromFlash(&fs, &ch.limits->failsafe, sizeof(fs));
     if (ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
-      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &lim.failsafe, size);
+      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &fs, size);
       if (ch.call) functionAt<void (*)()>(ch.call)();
     } else {
       Scalar ignored;
-      ch.thunk(ch.call, (const uint8_t*)&lim.failsafe, (uint8_t*)&ignored);
+      ch.thunk(ch.call, (const uint8_t*)&fs, (uint8_t*)&ignored);
     }
   }
 }
