@@ -62,7 +62,9 @@ template <typename F>
 F functionAt(const void* call) {
   F f;
 #if defined(__AVR__)
-  memcpy_P(&f, call, sizeof(f));
+  static_assert(sizeof(f) == 2, "AVR function pointers are one word");
+  uint16_t word = pgm_read_word(call);  // inline, where memcpy_P is a call and a stack frame
+  memcpy(&f, &word, sizeof(f));
 #else
   memcpy(&f, call, sizeof(f));
 #endif
