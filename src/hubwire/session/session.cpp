@@ -81,7 +81,11 @@ void Session::applyFailsafes() {
     find(id, ch);
     if (!(ch.flags & kHasFailsafe)) continue;
     Scalar fs;
+#if defined(__AVR__)
+    fs.bits = pgm_read_dword(&ch.limits->failsafe);  // inline: memcpy_P is a call
+#else
     fromFlash(&fs, &ch.limits->failsafe, sizeof(fs));
+#endif
     if (ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
