@@ -371,7 +371,7 @@ void Session::sendSamples(uint16_t now) {
     }
     uint8_t* out = tx().payload();
     uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
-    if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
+    if (portWritable(port_) < FrameWriter::wireSize8((uint8_t)(len + kSampleHeader))) continue;  // try again next update
     storeU16(out, s.since(now));
     tx().send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
     s.sent(now);
