@@ -30,6 +30,7 @@ Real real;
 char longText[HUBWIRE_MAX_PAYLOAD - 1];
 char text[HUBWIRE_MAX_PAYLOAD - 2];
 uint16_t level;
+float ratio;
 uint8_t small;
 int16_t whole;
 List<int16_t, 4> list;
@@ -127,6 +128,8 @@ bool startWide(Frameful) { return true; }
 #define CASE , expose("l", list).writable().failsafe(0)  // which length would it take?
 #elif HUBWIRE_CASE == 42
 #define CASE , action("two", twoWords)
+#elif HUBWIRE_CASE == 43
+#define CASE , expose("nan", ratio).writable().range(__builtin_nanf(""), 1.0f)  // float ranges rely on this
 #else
 #define CASE
 #endif

@@ -2,6 +2,9 @@
 // leaves for tables.h, and one channel's JSON.
 #include <gtest/gtest.h>
 
+#include <math.h>
+#include <string.h>
+
 #include <string>
 
 #include "hubwire/channels/dsl.h"
@@ -41,11 +44,27 @@ TEST(Dsl, ExposeAndItsOptions) {
   EXPECT_EQ(d.call(), &changed);
   EXPECT_TRUE(d.hasLimits());
   ChannelLimits lim = d.limits();
-  EXPECT_EQ(lim.min.f32, -1.0f);
-  EXPECT_EQ(lim.max.f32, 1.0f);
+  EXPECT_EQ((int32_t)(uint32_t)lim.min.bits, -0x3F800000);  // -1.0f's key: its magnitude's bits, negated
+  EXPECT_EQ((int32_t)(uint32_t)lim.max.bits, 0x3F800000);
+  EXPECT_EQ(lim.failsafe.f32, 0.0f);
   float in = 0.5f, out = 1.5f;
   EXPECT_TRUE(lim.inRange((const uint8_t*)&in, &lim.min, &lim.max));
   EXPECT_FALSE(lim.inRange((const uint8_t*)&out, &lim.min, &lim.max));
+}
+
+// A float range's limits are kept as keys the compiler works out from the floats' bits (channel.h).
+int32_t keyOfBits(float v) {
+  uint32_t b;
+  memcpy(&b, &v, 4);
+  return (b & 0x80000000u) ? -(int32_t)(b & 0x7FFFFFFFu) : (int32_t)b;
+}
+
+TEST(Dsl, FloatLimitKeysAreTheFloatsBits) {
+  static_assert(f32Key(1.0f) == 0x3F800000 && f32Key(-2.5f) == -0x40200000, "worked out while compiling");
+  static_assert(f32Key(-0.0f) == 0 && f32Key(INFINITY) == 0x7F800000 && f32Key(-INFINITY) == -0x7F800000, "ends");
+  for (float v : {0.1f, -0.1f, 1.0f, 1.5f, 3.0f, 1e-3f, 123456.789f, -7.25e12f, 3.40282347e38f, -3.40282347e38f,
+                  1.17549435e-38f, 1e-40f, -1e-45f, 0.0f, 0.99999994f, 1.0000001f})
+    EXPECT_EQ(f32Key(v), keyOfBits(v)) << v;
 }
 
 TEST(Dsl, ArraysStringsAndPlainVariables) {

@@ -462,6 +462,17 @@ TEST_F(Session, WriteErrorsLeaveTheValueAlone) {
   EXPECT_EQ(changes, 0);
 }
 
+// Float ranges are compared on the floats' bits (channel.h): the same verdicts as float comparison.
+TEST_F(Session, FloatRangeJudgedAsFloatComparisonWould) {
+  link();
+  for (float in : {-1.0f, 1.0f, 0.0f, -0.0f, 0.5f, -0.5f, 1e-40f, -1e-40f, 0.99999994f, -0.99999994f}) {
+    EXPECT_EQ(transact('C', kSpeed, le<float>(in)).type, kMsgAck) << in;
+    EXPECT_EQ(speed, in);
+  }
+  for (float out : {1.0000001f, -1.0000001f, 2.0f, -2.0f, INFINITY, -INFINITY, NAN, -NAN, 3e38f, -3e38f})
+    expectNak(transact('C', kSpeed, le<float>(out)), kErrOutOfRange);
+}
+
 TEST_F(Session, ControlCallsTheFunctionAndMayRefuse) {
   link();
   EXPECT_EQ(transact('C', kLed, Bytes(1, 9)).type, kMsgAck);

@@ -167,6 +167,11 @@ void checkMessage(const json& m, uint8_t type, const Bytes& p) {
   }
 }
 
+TEST(Frame, WireSizeOfAByteLongPayloadAsTheGeneralOne) {
+  for (unsigned len = 0; len <= 255; ++len)
+    EXPECT_EQ(FrameWriter::wireSize8((uint8_t)len), FrameWriter::wireSize(len)) << len;
+}
+
 TEST(Vectors, Frames) {
   std::set<std::string> kinds;
   for (auto& v : load("frames.json")) {

@@ -62,7 +62,9 @@ template <typename F>
 F functionAt(const void* call) {
   F f;
 #if defined(__AVR__)
-  memcpy_P(&f, call, sizeof(f));
+  static_assert(sizeof(f) == 2, "AVR function pointers are one word");
+  uint16_t word = pgm_read_word(call);  // inline, where memcpy_P is a call and a stack frame
+  memcpy(&f, &word, sizeof(f));
 #else
   memcpy(&f, call, sizeof(f));
 #endif
@@ -166,13 +168,36 @@ union Scalar {
   double f64;
 #endif
 };
+// of(): a failsafe value; bound(): a range limit, as inRange<T> reads it.
 template <typename T>
 struct ToScalar {
   static constexpr Scalar of(T v) { return Scalar(Scalar::Bits(), (ScalarBits)(int64_t)v); }
+  static constexpr Scalar bound(T v) { return of(v); }
 };
+// A float's bits order as a sign and a magnitude, so float ranges are judged on integer keys, without
+// the soft-float comparison boards without an FPU would link for them: the limits' keys are worked
+// out by the compiler (exactly: scaling by 2 is exact), the value's at run time (inRange<float>).
+// -0 and +0 share key 0. Limits are never NaN (range() refuses a min and max that do not compare),
+// so a NaN's key lies beyond one of them: NaN fails, as with float comparison.
+constexpr int f32Exponent(float a, int e) {
+  return a >= 2.0f ? f32Exponent(a / 2.0f, e + 1) : a < 1.0f && e > -126 ? f32Exponent(a * 2.0f, e - 1) : e;
+}
+constexpr float f32Scaled(float a, int e) {  // a scaled into [1, 2), or below 1 for a subnormal
+  return a >= 2.0f ? f32Scaled(a / 2.0f, e + 1) : a < 1.0f && e > -126 ? f32Scaled(a * 2.0f, e - 1) : a;
+}
+constexpr uint32_t f32Magnitude(float a) {  // a >= 0
+  return a > 3.40282347e38f ? 0x7F800000u
+       : a == 0.0f          ? 0u
+       : f32Scaled(a, 0) >= 1.0f
+           ? ((uint32_t)(f32Exponent(a, 0) + 127) << 23) | (uint32_t)((f32Scaled(a, 0) - 1.0f) * 8388608.0f)
+           : (uint32_t)(f32Scaled(a, 0) * 8388608.0f);
+}
+constexpr int32_t f32Key(float v) { return v < 0.0f ? -(int32_t)f32Magnitude(-v) : (int32_t)f32Magnitude(v); }
+
 template <>
 struct ToScalar<float> {
   static constexpr Scalar of(float v) { return Scalar(v); }
+  static constexpr Scalar bound(float v) { return Scalar(Scalar::Bits(), (ScalarBits)(uint32_t)f32Key(v)); }
 };
 template <>
 struct ToScalar<double> {
@@ -181,6 +206,7 @@ struct ToScalar<double> {
 #else
   static constexpr Scalar of(double v) { return Scalar((float)v); }  // double is float here
 #endif
+  static constexpr Scalar bound(double v) { return of(v); }
 };
 
 // Is the value at v (the channel's type) within [*lo, *hi]? Instantiated only for types given a
@@ -194,7 +220,16 @@ bool inRange(const void* v, const Scalar* lo, const Scalar* hi) {
   memcpy(&b, hi, sizeof(T));
   return x >= a && x <= b;  // NaN fails
 }
-
+template <>
+inline bool inRange<float>(const void* v, const Scalar* lo, const Scalar* hi) {
+  static_assert(sizeof(float) == 4, "IEEE single precision");
+  int32_t b, a, c;
+  memcpy(&b, v, 4);
+  memcpy(&a, lo, 4);  // keys (ToScalar<float>::bound)
+  memcpy(&c, hi, 4);
+  int32_t x = b < 0 ? -(b & 0x7FFFFFFF) : b;
+  return x >= a && x <= c;
+}
 // A channel's range and failsafe values (ChannelInfo::flags says which it has), in flash apart
 // from its record: only channels that declare them pay for them.
 struct ChannelLimits {

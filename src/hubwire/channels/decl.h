@@ -68,6 +68,7 @@ struct IsFloat<double> {
 template <typename T>
 struct Limits {
   static constexpr Scalar of(T v) { return ToScalar<T>::of(v); }
+  static constexpr Scalar bound(T v) { return ToScalar<T>::bound(v); }
   static constexpr InRange inRange(uint8_t flags) { return flags & (kHasRange | kHasFailsafe) ? &hubwire::inRange<T> : nullptr; }
   static constexpr bool ordered(T lo, T hi) { return lo <= hi; }
   // A float channel rounds (0.1 has no exact float); an integer one must keep the value.
@@ -77,6 +78,7 @@ struct Limits {
 template <>
 struct Limits<NotNumeric> {
   static constexpr Scalar of(NotNumeric) { return Scalar(); }
+  static constexpr Scalar bound(NotNumeric) { return Scalar(); }
   static constexpr InRange inRange(uint8_t) { return nullptr; }
   static constexpr bool ordered(NotNumeric, NotNumeric) { return true; }
   template <typename U>
@@ -218,7 +220,7 @@ class Decl {
                        access_, (uint8_t)(flags_ & (kHasRange | kHasFailsafe))};
   }
   constexpr ChannelLimits limits() const {
-    return ChannelLimits{Limits<T>::inRange(flags_), Limits<T>::of(lo_), Limits<T>::of(hi_), Limits<T>::of(failsafe_)};
+    return ChannelLimits{Limits<T>::inRange(flags_), Limits<T>::bound(lo_), Limits<T>::bound(hi_), Limits<T>::of(failsafe_)};
   }
   constexpr bool hasLimits() const { return flags_ & (kHasRange | kHasFailsafe); }
   constexpr const char* unitText() const { return unit_; }

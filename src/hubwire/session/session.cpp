@@ -88,16 +88,20 @@ void Session::applyFailsafes() {
     ChannelInfo ch;
     find(id, ch);
     if (!(ch.flags & kHasFailsafe)) continue;
-    ChannelLimits lim;
-    fromFlash(&lim, ch.limits, sizeof(lim));
+    Scalar fs;
+#if defined(__AVR__)
+    fs.bits = pgm_read_dword(&ch.limits->failsafe);  // inline: memcpy_P is a call
+#else
+    fromFlash(&fs, &ch.limits->failsafe, sizeof(fs));
+#endif
     if (ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
-      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &lim.failsafe, size);
+      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &fs, size);
       if (ch.call) functionAt<void (*)()>(ch.call)();
     } else {
       Scalar ignored;
-      ch.thunk(ch.call, (const uint8_t*)&lim.failsafe, (uint8_t*)&ignored);
+      ch.thunk(ch.call, (const uint8_t*)&fs, (uint8_t*)&ignored);
     }
   }
 }
@@ -377,7 +381,7 @@ void Session::sendSamples(uint16_t now) {
     }
     uint8_t* out = tx().payload();
     uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
-    if (portWritable(port_) < FrameWriter::wireSize(len + kSampleHeader)) continue;  // try again next update
+    if (portWritable(port_) < FrameWriter::wireSize8((uint8_t)(len + kSampleHeader))) continue;  // try again next update
     storeU16(out, s.since(now));
     tx().send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
     s.sent(now);

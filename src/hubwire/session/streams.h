@@ -51,18 +51,22 @@ class Streams {
   /// the one granted (HUBWIRE_MIN_STREAM_INTERVAL_MS..60000). False when every slot is taken.
   ///   uint16_t interval = 100; if (!streams.subscribe(id, interval, now)) nak(kErrBusy);
   bool subscribe(uint8_t id, uint16_t& interval, uint16_t now) {
+    // One pass: the channel's own slot, else the first free one (samples go out in slot order).
     Subscription* slot = nullptr;
-    for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS; ++i) {
-      if (slots_[i].id == id) slot = &slots_[i];
+    for (uint8_t i = HUBWIRE_MAX_STREAMS; i-- > 0;) {
+      Subscription& s = slots_[i];
+      if (s.id == id) {
+        slot = &s;
+        break;
+      }
+      if (s.id == 0) slot = &s;
     }
     if (interval == 0) {
       if (slot) slot->id = 0;
       return true;
     }
-    if (!slot) {
-      for (uint8_t i = 0; i < HUBWIRE_MAX_STREAMS && !slot; ++i)
-        if (slots_[i].id == 0) slot = &slots_[i];
-      if (!slot) return false;
+    if (!slot) return false;
+    if (slot->id != id) {
       slot->seq = 0;
       slot->last = now;  // a new subscription: its first sample reports the time since
     }

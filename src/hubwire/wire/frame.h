@@ -107,6 +107,8 @@ class BasicFrameWriter {
   uint8_t* payload() { return buf_ + 1 + kFrameHeader; }
   // Wire bytes a frame with this payload length takes at most (COBS code bytes and delimiter).
   static size_t wireSize(size_t len) { return len + kFrameOverhead + (len + kFrameOverhead) / 254 + 2; }
+  // The same for a payload length that fits a byte, without the division (a library call on AVR).
+  static uint16_t wireSize8(uint8_t len) { return (uint16_t)(len + kFrameOverhead + 2 + (len + kFrameOverhead >= 254)); }
   // Adds header and CRC to the len payload bytes already in payload(), and sends the frame.
   void send(Port& out, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
     sendFrame<(kMaxPayload + kFrameOverhead >= 0xFE)>(out, buf_, type, seq, id, len);

@@ -31,6 +31,10 @@ uint8_t alignOf(TypeCode t) {
   }
 }
 
+// Where no scalar needs alignment (AVR), a struct's memory form is its wire form: its values are
+// copied as they are, and the codec walks the fields only for sizes and checks.
+const bool kPackedStructs = alignof(uint16_t) == 1 && alignof(uint32_t) == 1 && alignof(float) == 1 && alignof(double) == 1;
+
 uint16_t alignUp(uint16_t v, uint8_t a) { return (uint16_t)((v + a - 1) / a * a); }
 
 bool boolsValid(TypeCode t, const uint8_t* p, uint16_t n) {
@@ -81,10 +85,10 @@ uint16_t structCodec(StructOp op, const char* compiled, const void* in, void* ou
     uint8_t a = alignOf(code);
     if (a > maxAlign) maxAlign = a;
     memOff = alignUp(memOff, a);
-    if (op == kStructToWire) memcpy(to + wireOff, from + memOff, n);
-    if (op == kStructFromWire) memcpy(to + memOff, from + wireOff, n);
+    if (!kPackedStructs && op == kStructToWire) memcpy(to + wireOff, from + memOff, n);
+    if (!kPackedStructs && op == kStructFromWire) memcpy(to + memOff, from + wireOff, n);
     if (op == kStructCheck && !boolsValid(code, from + wireOff, n)) return kErrBadValue;
-    if (window) {  // the part of this field inside the window
+    if (!kPackedStructs && window) {  // the part of this field inside the window
       uint16_t first = wireOff > lo ? wireOff : lo, end = (uint16_t)(lo + len);
       if (wireOff + n < end) end = (uint16_t)(wireOff + n);
       if (first < end) memcpy(to + (first - lo), from + memOff + (first - wireOff), (size_t)(end - first));
@@ -129,7 +133,7 @@ uint16_t ValueType::toWire(const void* mem, uint8_t* wire) const {
     memcpy(wire + 1, m, n);
     return (uint16_t)(n + 1);
   }
-  if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructToWire, layout, mem, wire, 0);
+  if (uses(kUsesStructs) && code == kStruct && !kPackedStructs) return sketchStructCodec(kStructToWire, layout, mem, wire, 0);
   uint16_t n = wireSize();
   memcpy(wire, m, n);
   return n;
@@ -162,7 +166,7 @@ void ValueType::fromWire(const uint8_t* wire, uint16_t len, void* mem) const {
   if (uses(kUsesStrings) && code == kStr) {
     memcpy(m, wire + 1, wire[0]);
     m[wire[0]] = 0;
-  } else if (uses(kUsesStructs) && code == kStruct) {
+  } else if (uses(kUsesStructs) && code == kStruct && !kPackedStructs) {
     sketchStructCodec(kStructFromWire, layout, wire, mem, len);
   } else {
     memcpy(m, wire, len);
@@ -186,7 +190,7 @@ uint16_t ValueType::wireLength(const void* mem) const {
 void ValueType::wireRange(const void* mem, uint16_t offset, uint8_t* out, uint16_t n) const {
   const uint8_t* m = (const uint8_t*)mem;
   if (n == 0) return;
-  if (uses(kUsesStructs) && code == kStruct) {
+  if (uses(kUsesStructs) && code == kStruct && !kPackedStructs) {
     StructWindow w = {mem, offset};
     sketchStructCodec(kStructWireRange, layout, &w, out, n);
     return;
