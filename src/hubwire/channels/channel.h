@@ -156,7 +156,7 @@ typedef uint32_t ScalarBits;
 #endif
 union Scalar {
   struct Bits {};
-  constexpr Scalar() : bits(0) {}
+  Scalar() = default;  // left unset: run-time copies are read from flash over it
   constexpr Scalar(Bits, ScalarBits b) : bits(b) {}
   constexpr Scalar(float v) : f32(v) {}  // NOLINT
 #if HUBWIRE_HAS_F64

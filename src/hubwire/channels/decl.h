@@ -77,8 +77,8 @@ struct Limits {
 };
 template <>
 struct Limits<NotNumeric> {
-  static constexpr Scalar of(NotNumeric) { return Scalar(); }
-  static constexpr Scalar bound(NotNumeric) { return Scalar(); }
+  static constexpr Scalar of(NotNumeric) { return Scalar(Scalar::Bits(), 0); }
+  static constexpr Scalar bound(NotNumeric) { return Scalar(Scalar::Bits(), 0); }
   static constexpr InRange inRange(uint8_t) { return nullptr; }
   static constexpr bool ordered(NotNumeric, NotNumeric) { return true; }
   template <typename U>
