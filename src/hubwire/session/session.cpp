@@ -30,6 +30,17 @@ Session::Session(Port& port)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
 
+// The session's address in a register the optimiser cannot see through. With link-time
+// optimisation a global session's fields are constant addresses (lds/sts, 4 bytes each); behind
+// this, an out-of-line function loads the address once and reaches them with ldd/std (2 bytes).
+// Pays only in a short function with few calls: in the body LTO inlines into main() it costs.
+__attribute__((always_inline)) static inline Session* opaque(Session* s) {
+#if defined(__AVR__)
+  asm("" : "+r"(s));
+#endif
+  return s;
+}
+
 // Reads n bytes of the table's flash.
 static void fromFlash(void* to, const void* from, size_t n) {
 #if defined(__AVR__)
@@ -100,10 +111,11 @@ void Session::applyFailsafes() {
 // powered board repeats everything else. Mixing by xor is enough: any one part differing makes the
 // nonce differ, and the hub needs no more than that (docs/PROTOCOL.md 4).
 void Session::drawNonce(uint32_t hubNonce) {
-  uint32_t t = portMicros(port_);
-  uint32_t h = nonce_ ^ hubNonce ^ ((t << 16) | (t >> 16));
-  nonce_ = h ? h : 1;  // never 0: the protocol reserves it
-  nonceDrawn_ = true;
+  Session* s = opaque(this);
+  uint32_t t = portMicros(s->port_);
+  uint32_t h = s->nonce_ ^ hubNonce ^ ((t << 16) | (t >> 16));
+  s->nonce_ = h ? h : 1;  // never 0: the protocol reserves it
+  s->nonceDrawn_ = true;
 }
 
 void Session::update() {
