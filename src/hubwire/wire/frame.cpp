@@ -16,7 +16,18 @@ void FrameReceiver::reset() {
   started_ = false;
 }
 
+// Out of line (one copy, and the byte loop that inlines feed() stays small), reaching the receiver
+// through a register the optimiser cannot see through: with link-time optimisation a global
+// receiver's fields would be constant addresses (lds/sts, 4 bytes each) where ldd/std take 2.
 bool FrameReceiver::feedSlow(uint8_t byte) {
+  FrameReceiver* r = this;
+#if defined(__AVR__)
+  asm("" : "+r"(r));
+#endif
+  return r->judge(byte);
+}
+
+inline bool FrameReceiver::judge(uint8_t byte) {
   if (byte == 0) {  // delimiter: judge what was collected, then start afresh
     bool wasStarted = started_, overflowed = beyond_ == kOverflowed, complete = (left_ == 0 && beyond_ == 0);
     uint16_t len = (uint16_t)(at_ - buf_);

@@ -73,7 +73,8 @@ class FrameReceiver {
   LinkCounters counters;
 
  private:
-  bool feedSlow(uint8_t byte);
+  HUBWIRE_NOINLINE bool feedSlow(uint8_t byte);
+  HUBWIRE_ALWAYS_INLINE bool judge(uint8_t byte);  // feedSlow()'s body
   static const uint8_t kOverflowed = 0xFF;
 
   uint8_t* buf_;
