@@ -30,17 +30,6 @@ Session::Session(Port& port)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
 
-// The session's address in a register the optimiser cannot see through. With link-time
-// optimisation a global session's fields are constant addresses (lds/sts, 4 bytes each); behind
-// this, an out-of-line function loads the address once and reaches them with ldd/std (2 bytes).
-// Pays only in a short function with few calls: in the body LTO inlines into main() it costs.
-__attribute__((always_inline)) static inline Session* opaque(Session* s) {
-#if defined(__AVR__)
-  asm("" : "+r"(s));
-#endif
-  return s;
-}
-
 // Reads n bytes of the table's flash.
 static void fromFlash(void* to, const void* from, size_t n) {
 #if defined(__AVR__)
