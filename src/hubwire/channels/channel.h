@@ -251,7 +251,7 @@ struct ChannelInfo {
 // A sketch's declarations as begin() takes them (HUBWIRE_CHANNELS): the descriptor JSON and one
 // record per channel, all in flash.
 struct ChannelTable {
-  const char* json;  // in flash, just after the first kDigestSize bytes of its SHA-256
+  const char* json;  // in flash, after hello's fixed fields and the first kDigestSize bytes of its SHA-256
   uint32_t hash;  // FNV-1a of the JSON, worked out by the compiler as well
   uint16_t jsonLength;
   const ChannelInfo* channels;

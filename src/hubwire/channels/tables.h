@@ -175,24 +175,6 @@ struct TailMessage : PartMessage<TailPart> {};
 template <typename D, const D* Decls>
 struct DescriptorMessage : sha256::Concat<Parts<D, Decls, 0, D::size() + 1>, TailMessage<D, Decls> > {};
 
-// The first kDigestSize bytes of the JSON's SHA-256 and, right after them in flash, the JSON. Hello
-// sends the digest, found at json - kDigestSize: the table copied into RAM does not grow.
-template <typename D, const D* Decls>
-struct JsonAndDigest {
-  sha256::Digest<kDigestSize> digest;
-  JsonText<D, Decls> text;
-};
-// value is constexpr where it is declared (the hash reads it while compiling), so it is a member of
-// a class of its own: a class cannot hold a constexpr object of its own, still incomplete, type.
-template <typename D, const D* Decls>
-struct Json {
-  typedef JsonAndDigest<D, Decls> Stored;
-  static constexpr Stored value = {sha256::digest<DescriptorMessage<D, Decls>, kDigestSize>(),
-                                   {PartConst<HeadPart<D, Decls> >::value, decltype(JsonText<D, Decls>::body)::make()}};
-};
-template <typename D, const D* Decls>
-constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value;
-
 // The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
 // channel, so that the compiler's depth limit is far away.
 constexpr uint32_t fnvChars(const char* c, size_t n, uint32_t h, size_t i = 0) {
@@ -214,6 +196,50 @@ template <typename D, const D* Decls, size_t I, size_t... R>
 constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32_t h) {
   return hashOf(b.rest, fnvChars(b.first.c, sizeof(b.first.c), h));
 }
+
+// The JSON as a constant of its own: the hash and hello's fields are worked out from it.
+template <typename D, const D* Decls>
+struct TextOf {
+  static constexpr JsonText<D, Decls> value = {PartConst<HeadPart<D, Decls> >::value,
+                                               decltype(JsonText<D, Decls>::body)::make()};
+};
+template <typename D, const D* Decls>
+constexpr JsonText<D, Decls> TextOf<D, Decls>::value;
+template <typename D, const D* Decls>
+constexpr uint32_t hashOfText() {
+  return hashOf(TextOf<D, Decls>::value.body,
+                fnvChars(TextOf<D, Decls>::value.head.c, sizeof(TextOf<D, Decls>::value.head.c), kFnvOffset));
+}
+
+// Hello's fixed fields (bytes 6..15: the payload the device accepts, its heartbeat interval, the
+// descriptor's hash and length, little-endian), then the first kDigestSize bytes of the JSON's
+// SHA-256 (hello 16..31), then the JSON: hello copies its fixed part from flash in one piece,
+// found at json - kDigestSize - kHelloFixed.
+struct HelloFixed {
+  uint8_t bytes[kHelloFixed];
+};
+constexpr HelloFixed helloFixed(uint16_t length, uint32_t hash) {
+  return HelloFixed{{(uint8_t)HUBWIRE_MAX_PAYLOAD, (uint8_t)(HUBWIRE_MAX_PAYLOAD >> 8), (uint8_t)HUBWIRE_HEARTBEAT_MS,
+                     (uint8_t)(HUBWIRE_HEARTBEAT_MS >> 8), (uint8_t)hash, (uint8_t)(hash >> 8), (uint8_t)(hash >> 16),
+                     (uint8_t)(hash >> 24), (uint8_t)length, (uint8_t)(length >> 8)}};
+}
+template <typename D, const D* Decls>
+struct JsonAndDigest {
+  HelloFixed hello;
+  sha256::Digest<kDigestSize> digest;
+  JsonText<D, Decls> text;
+};
+// value is constexpr where it is declared, so it is a member of a class of its own: a class cannot
+// hold a constexpr object of its own, still incomplete, type.
+template <typename D, const D* Decls>
+struct Json {
+  typedef JsonAndDigest<D, Decls> Stored;
+  static constexpr Stored value = {helloFixed((uint16_t)sizeof(JsonText<D, Decls>), hashOfText<D, Decls>()),
+                                   sha256::digest<DescriptorMessage<D, Decls>, kDigestSize>(),
+                                   TextOf<D, Decls>::value};
+};
+template <typename D, const D* Decls>
+constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value;
 
 // A struct channel's layout, compiled to two bytes a field (layout.h) into flash for the session's
 // struct codec.
@@ -350,13 +376,9 @@ constexpr ChannelTable table(const typename Stored<D, Decls>::JsonType& json,
   static_assert(allTextsShort(Decls->hub), "a hub channel's name, unit or description longer than 255 characters");
   static_assert(namesUnique(Decls->hub), "two hub channels have the same name");
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
-  static_assert(sizeof(JsonAndDigest<D, Decls>) == sizeof(JsonText<D, Decls>) + kDigestSize,
-                "the JSON follows the digest without a gap");
-  return ChannelTable{json.text.head.c,
-                      hashOf(Json<D, Decls>::value.text.body,
-                             fnvChars(Json<D, Decls>::value.text.head.c, sizeof(Json<D, Decls>::value.text.head.c),
-                                      kFnvOffset)),
-                      (uint16_t)sizeof(JsonText<D, Decls>), infos.v,
+  static_assert(sizeof(JsonAndDigest<D, Decls>) == kHelloFixed + kDigestSize + sizeof(JsonText<D, Decls>),
+                "hello's fixed fields, the digest and the JSON lie end to end");
+  return ChannelTable{json.text.head.c, hashOfText<D, Decls>(), (uint16_t)sizeof(JsonText<D, Decls>), infos.v,
                       D::size()};
 }
 

@@ -407,16 +407,11 @@ void Session::sendHello(uint8_t flags) {
   uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
   p[1] = (uint8_t)(flags | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
-  // Multi-byte fields are copied as they are in memory: that is their wire form (config.h).
-  memcpy(p + 2, &nonce_, 4);
-  storeU16(p + 6, HUBWIRE_MAX_PAYLOAD);
-  storeU16(p + 8, HUBWIRE_HEARTBEAT_MS);
-  storeU32(p + 10, table(&ChannelTable::hash));
-  storeU16(p + 14, table(&ChannelTable::jsonLength));
-  // The descriptor's digest (just before the JSON in flash), sent to a hub that accepts it: one
-  // that accepts only 16 bytes gets the hello it knows.
-  if (HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd)
-    fromFlash(p + kHelloSize, table(&ChannelTable::json) - kDigestSize, kDigestSize);
+  memcpy(p + 2, &nonce_, 4);  // as it is in memory: that is its wire form (config.h)
+  // The fixed fields and the digest, just before the JSON in flash (channels/tables.h); the digest
+  // goes to a hub that accepts it: one that accepts only 16 bytes gets the hello it knows.
+  const uint8_t kFixed = HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd ? kHelloFixed + kDigestSize : kHelloFixed;
+  fromFlash(p + kHelloSize - kHelloFixed, table(&ChannelTable::json) - kDigestSize - kHelloFixed, kFixed);
   tx().send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
 }
 

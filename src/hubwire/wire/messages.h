@@ -27,6 +27,7 @@ enum MessageType : uint8_t {
 enum HelloFlags : uint8_t { kHelloDevice = 1, kHelloReply = 2, kHelloF64 = 4 };
 
 const uint8_t kHelloSize = 16;        // a hello without the digest: what every peer accepts
+const uint8_t kHelloFixed = 10;       // hello 6..15: payload limit, heartbeat, descriptor hash and length
 const uint8_t kDigestSize = 16;       // the descriptor's SHA-256, first 16 bytes (hello 16..31)
 const uint8_t kHelloDigestEnd = kHelloSize + kDigestSize;
 const uint8_t kHeartbeatSize = 10;
