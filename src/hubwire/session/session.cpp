@@ -86,8 +86,7 @@ void Session::applyFailsafes() {
   const uint8_t count = table(&ChannelTable::count);
   for (uint8_t id = 1; id <= count; ++id) {
     ChannelInfo ch;
-    find(id, ch);
-    if (!(ch.flags & kHasFailsafe)) continue;
+    if (!find(id, ch) || !(ch.flags & kHasFailsafe)) continue;
     Scalar fs;
 #if defined(__AVR__)
     fs.bits = pgm_read_dword(&ch.limits->failsafe);  // inline: memcpy_P is a call
