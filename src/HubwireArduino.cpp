@@ -24,9 +24,9 @@ size_t portWritable(Port& p) {
   return 0xFFFF;
 }
 uint32_t portMillis(Port&) { return ::millis(); }
-#if defined(__AVR__)
-// Timer 0's count (what micros() reads) under the milliseconds: as good for entropy as micros(),
-// without its 74 bytes (millis() is linked anyway).
+#if defined(__AVR__) && defined(TCNT0)
+// Timer 0's count (what micros() reads on the classic AVRs) under the milliseconds: as good for
+// entropy as micros(), without its 74 bytes (millis() is linked anyway).
 uint32_t portMicros(Port&) { return ((uint32_t)::millis() << 8) | TCNT0; }
 #else
 uint32_t portMicros(Port&) { return ::micros(); }
@@ -104,8 +104,10 @@ uint32_t bootNonce() {
 #elif defined(ESP32)
   bootCounter ^= esp_random();
 #endif
-  // Differs from the last boot; Session mixes in the moment the hub is first heard and its nonce.
-  return ++bootCounter;
+  // Differs from the last boot (its first byte steps: cheaper than 32-bit arithmetic); Session
+  // mixes in the moment the hub is first heard and its nonce.
+  ++*(uint8_t*)&bootCounter;
+  return bootCounter;
 }
 
 }  // namespace hubwire
