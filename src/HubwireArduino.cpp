@@ -104,10 +104,8 @@ uint32_t bootNonce() {
 #elif defined(ESP32)
   bootCounter ^= esp_random();
 #endif
-  // Differs from the last boot (its first byte steps: cheaper than 32-bit arithmetic); Session
-  // mixes in the moment the hub is first heard and its nonce.
-  ++*(uint8_t*)&bootCounter;
-  return bootCounter;
+  // Differs from the last boot; Session mixes in the moment the hub is first heard and its nonce.
+  return ++bootCounter;
 }
 
 }  // namespace hubwire
