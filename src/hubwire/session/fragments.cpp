@@ -74,7 +74,7 @@ bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelI
     if (room && portWritable(s.port_) < FrameWriter::wireSize(total)) return false;
     if (prefixLen) memcpy(out, prefix, prefixLen);  // a read has none (prefix nullptr)
     ch.type.toWire(ch.data, out + prefixLen);
-    s.tx().send(s.port_, type, seq, id, (uint8_t)total);
+    s.send(type, seq, id, (uint8_t)total);
     return true;
   }
   uint8_t per = (uint8_t)(max - kFragmentHeader);  // max >= 16
@@ -92,7 +92,7 @@ bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelI
       --left;
     }
     ch.type.wireRange(ch.data, (uint16_t)(from - prefixLen), at, left);
-    s.tx().send(s.port_, kMsgFragment, seq, id, (uint8_t)(kFragmentHeader + n));
+    s.send(kMsgFragment, seq, id, (uint8_t)(kFragmentHeader + n));
   }
   return true;
 }

@@ -218,7 +218,7 @@ void Session::hubPoll(uint16_t now) {
     e.at = now;
     if (canSend) {
       memcpy(tx().payload(), e.data, e.len);
-      tx().send(port_, e.type, l.headSeq, e.id, e.len);
+      send(e.type, l.headSeq, e.id, e.len);
     }
     return;
   }

@@ -194,7 +194,7 @@ void Session::missionSend() {
   const uint8_t* sent = reinterpret_cast<const uint8_t*>(ch.data) + sizeof(MissionState) +
                         atLeastOne(calls.progressSize) + atLeastOne(calls.resultSize);
   memcpy(tx().payload(), sent, l.len);
-  tx().send(port_, kMsgMission, l.seq, l.id, l.len);
+  send(kMsgMission, l.seq, l.id, l.len);
   l.sentAt = ms();
 }
 

@@ -382,7 +382,7 @@ void Session::sendSamples(uint16_t now) {
     uint16_t len = ch.type.toWire(ch.data, out + kSampleHeader);
     if (portWritable(port_) < FrameWriter::wireSize8((uint8_t)(len + kSampleHeader))) continue;  // try again next update
     storeU16(out, s.since(now));
-    tx().send(port_, kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
+    send(kMsgSample, s.seq, s.id, (uint8_t)(len + kSampleHeader));
     s.sent(now);
   }
 #else
@@ -398,7 +398,7 @@ bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
 void Session::sendEvent(uint16_t now) {
   const EventQueue::Entry& e = events_.send(now);
   memcpy(tx().payload(), e.data, e.len);
-  tx().send(port_, kMsgEvent, events_.seq(), e.id, e.len);
+  send(kMsgEvent, events_.seq(), e.id, e.len);
 }
 
 void Session::sendHello(uint8_t flags) {
@@ -411,7 +411,7 @@ void Session::sendHello(uint8_t flags) {
   // goes to a hub that accepts it: one that accepts only 16 bytes gets the hello it knows.
   const uint8_t kFixed = HUBWIRE_MAX_PAYLOAD >= kHelloDigestEnd ? kHelloFixed + kDigestSize : kHelloFixed;
   fromFlash(p + kHelloSize - kHelloFixed, table(&ChannelTable::json) - kDigestSize - kHelloFixed, kFixed);
-  tx().send(port_, kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
+  send(kMsgHello, 0, 0, maxOut() >= kHelloDigestEnd ? kHelloDigestEnd : kHelloSize);
 }
 
 void Session::sendHeartbeat(uint16_t now) {
@@ -423,7 +423,7 @@ void Session::sendHeartbeat(uint16_t now) {
   storeU16(p + 2, since);
   static_assert(sizeof(LinkCounters) == 6, "crc, overflow, dropped: the heartbeat's order");
   memcpy(p + 4, &rx_.counters, 6);
-  tx().send(port_, kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
+  send(kMsgHeartbeat, (uint8_t)beatCounter_, 0, kHeartbeatSize);
   lastSent_ = now;
   beatSent_ = true;
 }
@@ -433,6 +433,6 @@ void Session::sendNak(const Frame& f, uint8_t code) {
   reply(kMsgNak, f, 1);
 }
 
-void Session::reply(uint8_t type, const Frame& f, uint8_t len) { tx().send(port_, type, f.seq, f.id, len); }
+void Session::reply(uint8_t type, const Frame& f, uint8_t len) { send(type, f.seq, f.id, len); }
 
 }  // namespace hubwire
