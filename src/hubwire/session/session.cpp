@@ -66,9 +66,12 @@ bool Session::begin(const ChannelTable& channels, uint32_t seed) {
   // Events learn their ids: emit() names the event by its handle.
   const ChannelInfo* record = table(&ChannelTable::channels);
   for (uint8_t id = 1; uses(kUsesEvents) && id <= count; ++id, ++record) {
-    ChannelInfo ch;
-    fromFlash(&ch, record, sizeof(ch));
-    if (ch.access & kEventAccess) *(uint8_t*)ch.data = id;
+#if defined(__AVR__)
+    // two fields read inline: memcpy_P of the whole record is a call and a frame on the stack
+    if (pgm_read_byte(&record->access) & kEventAccess) *(uint8_t*)pgm_read_word(&record->data) = id;
+#else
+    if (record->access & kEventAccess) *(uint8_t*)record->data = id;
+#endif
   }
   nonce_ = seed;  // until drawNonce() mixes in the moment the hub is first heard
   nonceDrawn_ = false;
