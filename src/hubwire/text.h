@@ -45,6 +45,17 @@ inline Text flashText(const char* s) { return Text(s, true); }
 #else
 #define HUBWIRE_RODATA
 #endif
+// A constant that link-time optimisation folds into the code reading it (a sketch's features,
+// table and hooks, and the library's weak defaults for them). On AVR each has a section of its
+// own, which the linker drops once every read was folded: LTO still emits a constant that code in
+// another partition read, and in a section shared with one still read it would stay in RAM. User
+// alignment keeps GCC's identical-constant folding from merging two equal ones (two null hooks, a
+// table and its flash copy): merged, their reads were no longer folded.
+#if defined(__AVR__)
+#define HUBWIRE_FOLDED(name) __attribute__((section(".rodata.hubwire." name), aligned(2)))
+#else
+#define HUBWIRE_FOLDED(name) HUBWIRE_RODATA __attribute__((aligned(2)))
+#endif
 
 }  // namespace hubwire
 

@@ -29,6 +29,8 @@
 #else
 #define HUBWIRE_UNUSED
 #endif
+// A hook's constant, folded into the session's code (text.h).
+#define HUBWIRE_HOOK(name) HUBWIRE_UNUSED HUBWIRE_FOLDED(name)
 
 /// Declares a sketch's channels at file scope, outside any namespace (it defines
 /// hubwire::sketchFeatures, features.h, and hubwire::sketchTable, channel.h); `var` is then what
@@ -58,14 +60,14 @@
   template <>                                                                                      \
   const ::hubwire::HubTable* const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),    \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
-                      hubwire_channels_##var::Tag>::type>::table HUBWIRE_UNUSED =                  \
+                      hubwire_channels_##var::Tag>::type>::table HUBWIRE_HOOK("hub_table") =       \
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls, &hubwire_channels_##var::declared>:: \
           get<hubwire_channels_##var::Stored::InfosType, &hubwire_channels_##var::infos>();        \
   template <>                                                                                      \
   bool (*const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),                        \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
                       hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, bool)    \
-      HUBWIRE_UNUSED =                                                                             \
+      HUBWIRE_HOOK("hub_dispatch") =                                                               \
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
                                      &hubwire_channels_##var::declared>::dispatch();               \
   HUBWIRE_LARGE_MEMBER(var, ::hubwire::Reassembly* const, state,                                     \
@@ -76,7 +78,7 @@
   template <>                                                                                      \
   ::hubwire::HubLink* const ::HubwireHub<(hubwire_channels_##var::Decls::hubSize() > 0),           \
       ::HubwireHubTag<(hubwire_channels_##var::Decls::hubSize() > 0),                              \
-                      hubwire_channels_##var::Tag>::type>::link HUBWIRE_UNUSED =                   \
+                      hubwire_channels_##var::Tag>::type>::link HUBWIRE_HOOK("hub_link") =         \
       ::hubwire::declare::HubTableOf<hubwire_channels_##var::Decls,                                \
                                      &hubwire_channels_##var::declared>::link();                   \
   HUBWIRE_MISSIONS_HOOK(                                                                           \
@@ -85,7 +87,7 @@
       ::hubwire::declare::anyMission(hubwire_channels_##var::declared.list),                       \
       ::HubwireHubTag<::hubwire::declare::anyMission(hubwire_channels_##var::declared.list),       \
                       hubwire_channels_##var::Tag>::type>::dispatch)(::hubwire::Session&, uint8_t) \
-      HUBWIRE_UNUSED = ::hubwire::declare::MissionHookOf<                                          \
+      HUBWIRE_HOOK("missions") = ::hubwire::declare::MissionHookOf<                                \
           ::hubwire::declare::anyMission(hubwire_channels_##var::declared.list)>::dispatch();)     \
   constexpr ::hubwire::ChannelTable var HUBWIRE_FLASH =                                            \
       ::hubwire::declare::table<decltype(hubwire_channels_##var::declared), &hubwire_channels_##var::declared>( \
@@ -99,37 +101,29 @@
   template <>                                                                                      \
   Type ::HubwireLarge<hubwire_channels_##var::large,                                               \
                       ::HubwireHubTag<hubwire_channels_##var::large, hubwire_channels_##var::Tag>::type>::member \
-      HUBWIRE_UNUSED = value;
+      HUBWIRE_HOOK("large_" #member) = value;
 
 // The sketch's features, for the session to test (features.h), its struct codec (wire/values.h),
 // the missions' hook (session/missions.h) and its table (channel.h); none with
 // HUBWIRE_ALL_FEATURES, whose programs (several tables) get the library's defaults built with it:
-// every feature, missions reachable (session/mission_flag.cpp), no table of their own. The
-// codec's user alignment keeps GCC's identical-constant folding from merging a null codec with the
-// library's null hooks: merged, the hooks were no longer folded into the code that reads them
-// (Missions: +28 B flash, +6 B SRAM).
+// every feature, missions reachable (session/mission_flag.cpp), no table of their own. Each is
+// HUBWIRE_FOLDED (text.h): merged by identical-constant folding (a null codec with the library's
+// null hooks), they were no longer folded into the code that reads them (Missions: +28 B flash,
+// +6 B SRAM).
 #if defined(HUBWIRE_ALL_FEATURES)
 #define HUBWIRE_SKETCH_FEATURES(f)
 #define HUBWIRE_MISSIONS_HOOK(...)
 #define HUBWIRE_SKETCH_TABLE(var) static_assert(sizeof(var) != 0, "")
 #else
 #define HUBWIRE_SKETCH_FEATURES(f)                                                                 \
-  const uint16_t hubwire::sketchFeatures HUBWIRE_RODATA = f;                                       \
-  const ::hubwire::StructCodec hubwire::sketchStructCodec HUBWIRE_RODATA __attribute__((aligned(2))) = \
+  const uint16_t hubwire::sketchFeatures HUBWIRE_FOLDED("sketch_features") = f;                      \
+  const ::hubwire::StructCodec hubwire::sketchStructCodec HUBWIRE_FOLDED("sketch_codec") =          \
       ((f) & ::hubwire::kUsesStructs) ? &::hubwire::structCodec : nullptr;
 #define HUBWIRE_MISSIONS_HOOK(...) __VA_ARGS__
 // The sketch's table as a constant the session reads (channel.h), and the flash copy begin() takes.
-// On AVR the constant has a section of its own, which the linker drops once every read of it was
-// folded (in a section shared with a constant still read, it would stay in RAM); either way GCC's
-// identical-constant folding cannot merge it with its flash copy, whose reads are not folded.
-#if defined(__AVR__)
-#define HUBWIRE_SKETCH_TABLE_SECTION __attribute__((section(".rodata.hubwire_sketch_table")))
-#else
-#define HUBWIRE_SKETCH_TABLE_SECTION HUBWIRE_RODATA __attribute__((aligned(2)))
-#endif
 #define HUBWIRE_SKETCH_TABLE(var)                                                                  \
-  const ::hubwire::ChannelTable hubwire::sketchTable HUBWIRE_SKETCH_TABLE_SECTION = var;          \
-  const ::hubwire::ChannelTable* const hubwire::sketchTableAt HUBWIRE_RODATA = &var
+  const ::hubwire::ChannelTable hubwire::sketchTable HUBWIRE_FOLDED("sketch_table") = var;         \
+  const ::hubwire::ChannelTable* const hubwire::sketchTableAt HUBWIRE_FOLDED("sketch_table_at") = &var
 #endif
 
 #endif

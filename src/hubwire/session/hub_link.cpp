@@ -41,7 +41,8 @@ bool Session::hubMine() {
   if (hubLink.owner == this) return true;
   HubTable t;
   readFlash(&t, hubTable(), sizeof(t));
-  if (!started_ || t.owner != table(&ChannelTable::channels)) return false;
+  // In a program with one table (sketchTable) the hub channels are that table's.
+  if (!started_ || (!sketchTable.count && t.owner != table(&ChannelTable::channels))) return false;
   memset(&hubLink, 0, sizeof(hubLink));
   hubLink.owner = this;
   hubLink.channels = t.channels;

@@ -4,9 +4,11 @@
 // the weak value into the code that reads it. A program built with HUBWIRE_ALL_FEATURES (several
 // tables, none defining it) gets the run time, as it gets every other feature (features.cpp).
 #include "missions.h"
+#include "../text.h"
 
 template <>
-__attribute__((weak)) bool (*const HubwireMissions<true, void>::dispatch)(::hubwire::Session&, uint8_t) =
+__attribute__((weak)) bool (*const HubwireMissions<true, void>::dispatch)(::hubwire::Session&, uint8_t)
+    HUBWIRE_FOLDED("missions") =
 #if defined(HUBWIRE_ALL_FEATURES)
     &::hubwire::missionDispatch;
 #else
