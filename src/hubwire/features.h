@@ -28,7 +28,10 @@ const uint16_t kUsesReads = 512;  // readable variables: requests answered with 
 const uint16_t kUsesLists = 1024;  // a hubwire::List<T, N> value: the variable-length codec
 const uint16_t kUsesLarge = 2048;  // a value whose message may not fit one frame: fragments
 const uint16_t kUsesMissions = 4096;  // mission(): starts, cancels and the M updates (session/missions.h)
-const uint16_t kAllFeatures = 0x1FFF;
+// A value whose answer or sample may not fit the 16 bytes of payload every hub accepts: only then
+// is its length checked against the hub's limit.
+const uint16_t kUsesWide = 8192;
+const uint16_t kAllFeatures = 0x3FFF;
 
 extern const uint16_t sketchFeatures;
 

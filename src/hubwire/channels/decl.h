@@ -258,7 +258,8 @@ class Decl {
                       (isListCode(ret_) ? kUsesLists : 0) | (K == kMission ? kUsesMissions : 0) |
                       (K == kEvent ? kUsesEvents : 0) | (flags_ & kHasRange ? kUsesRanges : 0) |
                       (access_ & kWritable && K == kVariable ? kUsesWrites : 0) | (access_ & kReadable ? kUsesReads : 0) |
-                      (isListCode(code_) ? kUsesLists : 0) | (large() ? kUsesLarge : 0));
+                      (isListCode(code_) ? kUsesLists : 0) | (large() ? kUsesLarge : 0) |
+                      (K < kRemote && wireBytes() + kSampleHeader > kHelloSize ? kUsesWide : 0));
   }
 
  private:

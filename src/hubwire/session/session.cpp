@@ -293,7 +293,8 @@ void Session::onRequest(const Frame& f) {
   if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
   // Not sent at all when the hub could not take it (its hello said how much it accepts), unless
   // it may go as fragments (fragments.cpp).
-  if (f.len != 0 || (!HubwireLarge<true, void>::send && ch.type.wireSize() > maxOut())) return sendNak(f, kErrBadLength);
+  if (f.len != 0 || (uses(kUsesWide) && !HubwireLarge<true, void>::send && ch.type.wireSize() > maxOut()))
+    return sendNak(f, kErrBadLength);
   if (HubwireLarge<true, void>::send)
     return (void)HubwireLarge<true, void>::send(*this, kMsgResponse, f.seq, f.id, ch, nullptr, 0, false);
   reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx().payload()));
@@ -352,7 +353,7 @@ void Session::onSubscribe(const Frame& f) {
   ChannelInfo ch;
   if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
   if (!uses(kUsesStreams) || !(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
-  if (f.len != 2 || (!HubwireLarge<true, void>::send && ch.type.wireSize() + kSampleHeader > maxOut()))
+  if (f.len != 2 || (uses(kUsesWide) && !HubwireLarge<true, void>::send && ch.type.wireSize() + kSampleHeader > maxOut()))
     return sendNak(f, kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
