@@ -82,7 +82,7 @@ uint16_t structCodec(StructOp op, const char* compiled, const void* in, void* ou
     uint16_t n = (uint16_t)(scalarSize(code) * (uint8_t)layout.at((uint16_t)(i + 1)));
     uint8_t a = alignOf(code);
     if (a > maxAlign) maxAlign = a;
-    memOff = alignUp(memOff, a);
+    memOff = kPackedStructs ? wireOff : alignUp(memOff, a);
     if (!kPackedStructs && op == kStructToWire) memcpy(to + wireOff, from + memOff, n);
     if (!kPackedStructs && op == kStructFromWire) memcpy(to + memOff, from + wireOff, n);
     if (op == kStructCheck && !boolsValid(code, from + wireOff, n)) return kErrBadValue;
