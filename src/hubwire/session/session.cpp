@@ -86,7 +86,7 @@ void Session::applyFailsafes() {
 #else
     fromFlash(&fs, &ch.limits->failsafe, sizeof(fs));
 #endif
-    if (ch.data) {
+    if (!uses(kUsesControlFailsafes) || ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
       for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &fs, size);
