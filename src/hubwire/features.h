@@ -28,10 +28,11 @@ const uint16_t kUsesReads = 512;  // readable variables: requests answered with 
 const uint16_t kUsesLists = 1024;  // a hubwire::List<T, N> value: the variable-length codec
 const uint16_t kUsesLarge = 2048;  // a value whose message may not fit one frame: fragments
 const uint16_t kUsesMissions = 4096;  // mission(): starts, cancels and the M updates (session/missions.h)
+const uint16_t kUsesControlFailsafes = 8192;  // failsafe() on a control: called with it when the link is lost
 // A value whose answer or sample may not fit the 16 bytes of payload every hub accepts: only then
 // is its length checked against the hub's limit.
-const uint16_t kUsesWide = 8192;
-const uint16_t kAllFeatures = 0x3FFF;
+const uint16_t kUsesWide = 16384;
+const uint16_t kAllFeatures = 0x7FFF;
 
 extern const uint16_t sketchFeatures;
 

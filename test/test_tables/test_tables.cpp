@@ -132,6 +132,10 @@ TEST(Tables, FeaturesOfTheDeclarations) {
   EXPECT_EQ(hubwire_channels_bench::features,
             kUsesWrites | kUsesReads | kUsesRanges | kUsesFailsafes | kUsesStructs | kUsesCalls | kUsesEvents);
   EXPECT_EQ(hubwire_channels_others::features, kUsesStrings | kUsesReads | kUsesStreams | kUsesCalls | kUsesReturns);
+  EXPECT_EQ(featuresOf(declared("c", control("c", setLamp).failsafe(false)).list),
+            kUsesCalls | kUsesFailsafes | kUsesControlFailsafes);
+  EXPECT_EQ(featuresOf(declared("v", expose("v", level).writable().failsafe(1)).list),
+            kUsesWrites | kUsesReads | kUsesFailsafes);
   // This program has several tables (HUBWIRE_ALL_FEATURES): the library's default holds.
   EXPECT_EQ(sketchFeatures, kAllFeatures);
   // ... and no table of the sketch's own: the session reads the one begin() was given.

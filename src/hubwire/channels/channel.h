@@ -156,7 +156,7 @@ typedef uint32_t ScalarBits;
 #endif
 union Scalar {
   struct Bits {};
-  Scalar() = default;  // left unset: run-time copies are read from flash over it
+  Scalar() = default;  // trivial: a Scalar about to be overwritten is not zeroed first; Scalar() is zero
   constexpr Scalar(Bits, ScalarBits b) : bits(b) {}
   constexpr Scalar(float v) : f32(v) {}  // NOLINT
 #if HUBWIRE_HAS_F64

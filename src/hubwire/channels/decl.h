@@ -253,6 +253,7 @@ class Decl {
   // The session's features this channel needs (features.h).
   constexpr uint16_t features() const {
     return (uint16_t)((access_ & kStreamable ? kUsesStreams : 0) | (flags_ & kHasFailsafe ? kUsesFailsafes : 0) |
+                      (flags_ & kHasFailsafe && K == kControl ? kUsesControlFailsafes : 0) |
                       (code_ == kStr ? kUsesStrings : 0) | (code_ == kStruct ? kUsesStructs : 0) |
                       (K == kControl || K == kAction ? kUsesCalls : 0) | (ret_ != kVoid && K != kMission ? kUsesReturns : 0) |
                       (isListCode(ret_) ? kUsesLists : 0) | (K == kMission ? kUsesMissions : 0) |

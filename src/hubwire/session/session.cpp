@@ -96,10 +96,11 @@ void Session::applyFailsafes() {
 #else
     fromFlash(&fs, &ch.limits->failsafe, sizeof(fs));
 #endif
-    if (ch.data) {
+    if (!uses(kUsesControlFailsafes) || ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);
-      for (uint8_t i = 0; i < n; ++i) memcpy((uint8_t*)ch.data + i * size, &fs, size);
+      uint8_t* d = (uint8_t*)ch.data;
+      for (uint8_t i = 0; i < n; ++i, d += size) memcpy(d, &fs, size);
       if (ch.call) functionAt<void (*)()>(ch.call)();
     } else {
       Scalar ignored;
@@ -315,8 +316,9 @@ void Session::onControl(const Frame& f) {
       ChannelLimits lim;
       fromFlash(&lim, ch.limits, sizeof(lim));
       uint8_t n = t.count ? t.count : 1, size = scalarSize(t.code);
-      for (uint8_t i = 0; i < n && code == kOk; ++i)
-        if (!lim.inRange(f.payload + i * size, &lim.min, &lim.max)) code = kErrOutOfRange;
+      const uint8_t* v = f.payload;
+      for (uint8_t i = 0; i < n; ++i, v += size)
+        if (!lim.inRange(v, &lim.min, &lim.max)) code = kErrOutOfRange;
       // A List: the loop above read its count byte as an element (size 0); the verdict on its
       // elements is this one. After the loop, where it leaves the other sketches' code alone.
       if (uses(kUsesLists) && isListCode(t.code)) code = listInRange(lim, t.code, f.payload);

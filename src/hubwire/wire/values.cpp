@@ -63,8 +63,6 @@ Text typeName(TypeCode t) {
 // One walk over the fields serves every operation: the wire form is packed, the memory form has
 // each field at its alignment. Ifs rather than a switch: AVR keeps switch tables in RAM.
 uint16_t structCodec(StructOp op, const char* compiled, const void* in, void* out, uint16_t len) {
-  // A value of the wrong length is refused as such, whatever its bytes.
-  if (op == kStructCheck && len != structCodec(kStructWireSize, compiled, nullptr, nullptr, 0)) return kErrBadLength;
   Text layout = flashText(compiled);
   const uint8_t* from = (const uint8_t*)in;
   uint8_t* to = (uint8_t*)out;
@@ -84,7 +82,7 @@ uint16_t structCodec(StructOp op, const char* compiled, const void* in, void* ou
     uint16_t n = (uint16_t)(scalarSize(code) * (uint8_t)layout.at((uint16_t)(i + 1)));
     uint8_t a = alignOf(code);
     if (a > maxAlign) maxAlign = a;
-    memOff = alignUp(memOff, a);
+    memOff = kPackedStructs ? wireOff : alignUp(memOff, a);
     if (!kPackedStructs && op == kStructToWire) memcpy(to + wireOff, from + memOff, n);
     if (!kPackedStructs && op == kStructFromWire) memcpy(to + memOff, from + wireOff, n);
     if (op == kStructCheck && !boolsValid(code, from + wireOff, n)) return kErrBadValue;
@@ -151,8 +149,8 @@ ErrorCode ValueType::check(const uint8_t* wire, uint16_t len) const {
     if (wire[0] > count) return kErrBadValue;
     return len == 1u + wire[0] ? kOk : kErrBadLength;
   }
+  if (len != wireSize()) return kErrBadLength;  // a value of the wrong length, whatever its bytes
   if (uses(kUsesStructs) && code == kStruct) return (ErrorCode)sketchStructCodec(kStructCheck, layout, wire, nullptr, len);
-  if (len != wireSize()) return kErrBadLength;
   return boolsValid(code, wire, len) ? kOk : kErrBadValue;
 }
 

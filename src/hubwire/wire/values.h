@@ -88,7 +88,8 @@ struct StructWindow {
   const void* mem;
   uint16_t offset;
 };
-// kStructToWire: in = memory, out = wire. kStructCheck: in = wire, len. kStructFromWire: in = wire,
+// kStructToWire: in = memory, out = wire. kStructCheck: in = wire of the struct's wire size (check()
+// judged the length already), its bools checked. kStructFromWire: in = wire,
 // out = memory. layout is the compiled layout: per field its type code and element count, then
 // kVoid ("ax:f32,gyro:i16[3]" is {kF32, 1, kI16, 3, kVoid}; channels/layout.h makes it).
 uint16_t structCodec(StructOp op, const char* layout, const void* in, void* out, uint16_t len);
