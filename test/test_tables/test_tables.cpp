@@ -107,6 +107,8 @@ hubwire::List<int16_t, 4> shortList;         // 9 bytes: one frame
 uint8_t justFits[HUBWIRE_MAX_PAYLOAD - 2];  // a sample of it: exactly one frame
 uint8_t oneMore[HUBWIRE_MAX_PAYLOAD - 1];   // a sample of it does not fit: fragments
 uint8_t wide[HUBWIRE_MAX_PAYLOAD + 1];      // a write of it does not fit either
+uint8_t fourteen[14];                       // a sample of it is 16 bytes: what every hub accepts
+uint8_t fifteen[15];                        // ... and one more
 }  // namespace
 
 HUBWIRE_CHANNELS(lists, "lists", expose("l", shortList).writable(), expose("fits", justFits));
@@ -119,12 +121,20 @@ namespace {
 // Large values: the `large` feature when a message carrying a value (a sample: 2 bytes more) may
 // not fit the device's frame; the reassembly buffer only for writes that do not fit.
 TEST(Tables, ListsAndLargeValues) {
-  EXPECT_EQ(hubwire_channels_lists::features, kUsesLists | kUsesWrites | kUsesReads);
+  EXPECT_EQ(hubwire_channels_lists::features, kUsesLists | kUsesWrites | kUsesReads | kUsesWide);
   EXPECT_EQ(hubwire_channels_lists::largeIn, 0);
   EXPECT_EQ(featuresOf(sampled.list) & kUsesLarge, kUsesLarge);
   EXPECT_EQ(largeInOf(sampled.list), 0);  // its write fits one frame
   EXPECT_EQ(hubwire_channels_written::features & (kUsesLarge | kUsesLists), kUsesLarge | kUsesLists);
   EXPECT_EQ(hubwire_channels_written::largeIn, sizeof(wide));
+}
+
+// Only a value whose answer or sample may pass the 16 bytes every hub accepts is checked against
+// the hub's own limit (kUsesWide).
+TEST(Tables, WideValues) {
+  EXPECT_EQ(featuresOf(declared("a", expose("a", fourteen)).list) & kUsesWide, 0);
+  EXPECT_EQ(featuresOf(declared("b", expose("b", fifteen)).list) & kUsesWide, kUsesWide);
+  EXPECT_EQ(featuresOf(declared("c", expose("c", level)).list) & kUsesWide, 0);
 }
 
 // What each declaration adds to the features HUBWIRE_CHANNELS works out (features.h).
