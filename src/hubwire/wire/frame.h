@@ -66,8 +66,8 @@ class FrameDecoderOf {
   // The frame, by value: its header is copied out, so an answer built in the same buffer cannot
   // change it. The payload stays in the buffer.
   Frame frame(const uint8_t* buf) const { return Frame{buf[0], buf[1], buf[2], frameLen_, buf + kFrameHeader}; }
-  // Forget any partial frame (the next byte starts a new one).
-  void reset();
+  // Forget any partial frame (the next byte starts a new one). Two callers in the session: one copy.
+  HUBWIRE_NOINLINE void reset();
   // No frame is partly received: the buffer holds nothing that is still needed.
   bool idle() const { return !started_; }
 
