@@ -55,11 +55,11 @@ uint32_t bootNonce();
 
 }  // namespace hubwire
 
-class Hubwire : private hubwire::Port, public hubwire::Session {
+class Hubwire : public hubwire::Session {
  public:
   /// A hub link over any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
   ///   Hubwire hub(Serial);
-  explicit Hubwire(Stream& stream) : hubwire::Port(stream), hubwire::Session(*static_cast<hubwire::Port*>(this)) {}
+  explicit Hubwire(Stream& stream) : hubwire::Session(ownPort_), ownPort_(stream) {}
   // One Hubwire per Stream: a copy would share the Stream and answer the hub twice.
   Hubwire(const Hubwire&) = delete;
   Hubwire& operator=(const Hubwire&) = delete;
@@ -67,6 +67,11 @@ class Hubwire : private hubwire::Port, public hubwire::Session {
   /// Starts talking, with the channels HUBWIRE_CHANNELS declared; false for an empty table.
   ///   void setup() { Serial.begin(115200); hub.begin(channels); }
   bool begin(const hubwire::ChannelTable& channels) { return hubwire::Session::begin(channels, hubwire::bootNonce()); }
+
+ private:
+  // After the session, which only keeps a reference to it: the session's zeroing then starts at
+  // the object's own address, which the global constructors hold in a register already (-6 B).
+  hubwire::Port ownPort_;
 };
 
 #endif

@@ -85,11 +85,13 @@ uint8_t portBoardId(Port&, uint8_t* out) {
 uint8_t portBoardId(Port&, uint8_t*) { return 0; }
 #endif
 
-#if defined(__AVR__)
-// Survives a reset (not a power cycle, where RAM starts random anyway), so each boot differs: for
-// 65,536 resets in a row, and the session mixes in more (drawNonce). 16 bits: a 32-bit increment
-// costs the Uno 16 B more flash.
-static uint16_t bootCounter __attribute__((section(".noinit")));
+#if defined(__AVR__) && !defined(HUBWIRE_NONCE_SOURCE)
+// Survives a reset (not a power cycle, where RAM starts random anyway), so each boot differs. One
+// byte is enough for that (the nonce also mixes in the hub's nonce and the time the hub is first
+// heard); counting in four cost 28 B more code.
+static uint8_t bootCounter __attribute__((section(".noinit")));
+#elif defined(__AVR__)
+static uint32_t bootCounter __attribute__((section(".noinit")));
 #else
 static uint32_t bootCounter;
 #endif

@@ -30,7 +30,7 @@ void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len) {
 bool hubDispatch(Session& s, bool frame) {
   if (!s.hubMine()) return false;
   s.hubSessionCheck();
-  if (frame) return s.hubFrame(s.rx_.frame());
+  if (frame) return s.hubFrame(s.received());
   s.hubPoll(s.ms());
   return false;
 }

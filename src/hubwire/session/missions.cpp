@@ -14,7 +14,7 @@ uint8_t atLeastOne(uint8_t n) { return n ? n : 1; }
 // ---- the session's three hooks (session.cpp) ----
 bool missionDispatch(Session& s, uint8_t what) {
   if (what == kMissionPoll) return s.missionPoll(s.ms()), false;
-  return what == kMissionFrame ? s.missionFrame(s.rx_.frame()) : s.missionAck(s.rx_.frame());
+  return what == kMissionFrame ? s.missionFrame(s.received()) : s.missionAck(s.received());
 }
 
 // The hub link when this session has one (hub channels): it keeps the transaction counter then.

@@ -25,7 +25,6 @@ __attribute__((always_inline)) static inline bool missionHook(Session& s, uint8_
 Session::Session(Port& port)
     : SessionState(),  // all zero
       port_(port) {
-  rx_.attach(frameBuf_ + 1, sizeof(frameBuf_) - 2);  // the writer's code byte and delimiter around it
   peerMax_ = kHelloSize;  // all a hub not yet heard is sure to accept (PROTOCOL.md 3.1)
   // lostAfterMs_ is set by the hello that brings the link up, before anything reads it.
 }
@@ -130,9 +129,9 @@ void Session::update() {
   for (; i < kMaxBytesPerUpdate; ++i) {
     int c = portRead(port_);
     if (c < 0) break;
-    if (rx_.feed((uint8_t)c)) {
+    if (rx_.feed((uint8_t)c, rxBuf(), kRxCapacity)) {
       lastRx_ = start;
-      handle(rx_.frame());
+      handle(received());
     }
   }
   uint16_t now = ms();

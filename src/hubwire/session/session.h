@@ -43,6 +43,15 @@ struct Same {
 
 // Everything a Session changes while it runs, kept apart from its references so that one
 // value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
+// The receiver's part of the frame buffer (frameBuf_ less the writer's code byte and delimiter),
+// counted in one byte where it fits (16 bits cost ~46 B more code on AVR).
+#if HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD) <= 255
+typedef uint8_t RxIndex;
+#else
+typedef uint16_t RxIndex;
+#endif
+const RxIndex kRxCapacity = HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD);
+
 struct SessionState {
   // Flags, a byte each: each read-modify-write of a bit cost more flash than the bytes they take
   // (paid for by the table, no longer copied into RAM: table()).
@@ -83,7 +92,7 @@ struct SessionState {
 #if HUBWIRE_MAX_STREAMS > 0
   Streams streams_;  // the hub's subscriptions
 #endif
-  FrameReceiver rx_;  // zeroed with the rest; the constructor attaches frameBuf_
+  FrameDecoderOf<RxIndex> rx_;  // zeroed with the rest; decodes into frameBuf_ (rxBuf(), kRxCapacity)
 };
 
 class Session : private SessionState {
@@ -302,6 +311,10 @@ class Session : private SessionState {
   }
   void reply(uint8_t type, const Frame& f, uint8_t len);
   uint8_t maxOut() const { return peerMax_; }
+
+  // The receiver's part of frameBuf_: the writer's code byte and delimiter lie around it.
+  uint8_t* rxBuf() { return frameBuf_ + 1; }
+  Frame received() const { return rx_.frame(frameBuf_ + 1); }  // the frame feed() completed
 
   Port& port_;
   // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.

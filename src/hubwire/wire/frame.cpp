@@ -8,29 +8,20 @@
 
 namespace hubwire {
 
-void FrameReceiver::reset() {
-  at_ = buf_;
-  left_ = 0;
+template <typename Index>
+void FrameDecoderOf<Index>::reset() {
+  at_ = 0;
+  fitEnd_ = 0;
   beyond_ = 0;
   pendingZero_ = false;
   started_ = false;
 }
 
-// Out of line (one copy, and the byte loop that inlines feed() stays small), reaching the receiver
-// through a register the optimiser cannot see through: with link-time optimisation a global
-// receiver's fields would be constant addresses (lds/sts, 4 bytes each) where ldd/std take 2.
-bool FrameReceiver::feedSlow(uint8_t byte) {
-  FrameReceiver* r = this;
-#if defined(__AVR__)
-  asm("" : "+r"(r));
-#endif
-  return r->judge(byte);
-}
-
-inline bool FrameReceiver::judge(uint8_t byte) {
+template <typename Index>
+bool FrameDecoderOf<Index>::feedSlow(uint8_t byte, uint8_t* buf, Index cap) {
   if (byte == 0) {  // delimiter: judge what was collected, then start afresh
-    bool wasStarted = started_, overflowed = beyond_ == kOverflowed, complete = (left_ == 0 && beyond_ == 0);
-    uint16_t len = (uint16_t)(at_ - buf_);
+    bool wasStarted = started_, overflowed = beyond_ == kOverflowed, complete = (at_ == fitEnd_ && beyond_ == 0);
+    Index len = at_;
     reset();
     if (!wasStarted) return false;  // lone delimiter: a sender flushing line noise
     uint16_t* bad;  // the counter of the reason it is dropped: one increment for all of them
@@ -38,7 +29,7 @@ inline bool FrameReceiver::judge(uint8_t byte) {
       bad = &counters.overflow;
     } else if (!complete || len < kFrameOverhead) {
       bad = &counters.dropped;
-    } else if (crc16(buf_, len - 2) != loadU16(buf_ + len - 2)) {
+    } else if (crc16(buf, len - 2) != loadU16(buf + len - 2)) {
       bad = &counters.crc;
     } else {
       frameLen_ = (uint8_t)(len - kFrameOverhead);
@@ -53,21 +44,26 @@ inline bool FrameReceiver::judge(uint8_t byte) {
     return false;
   }
   // A code byte opens the next block: the zero the last one implied, then up to code - 1 bytes,
-  // as many of them as fit counted in left_, the rest in beyond_.
+  // those that fit up to fitEnd_, the rest counted in beyond_.
   if (pendingZero_) {
-    if (at_ >= end_) {
+    if (at_ >= cap) {
       beyond_ = kOverflowed;
       return false;
     }
-    *at_++ = 0;
+    buf[at_++] = 0;
   }
   uint8_t n = (uint8_t)(byte - 1);
-  uint16_t room = (uint16_t)(end_ - at_);
-  left_ = room < n ? (uint8_t)room : n;
-  beyond_ = (uint8_t)(n - left_);
+  Index room = (Index)(cap - at_);
+  uint8_t fit = room < n ? (uint8_t)room : n;
+  fitEnd_ = (Index)(at_ + fit);
+  beyond_ = (uint8_t)(n - fit);
   pendingZero_ = (byte != 0xFF);
   return false;
 }
+
+// The session's (an index of one byte) and FrameReceiver's.
+template class FrameDecoderOf<uint8_t>;
+template class FrameDecoderOf<uint16_t>;
 
 template <bool kLongBlocks>
 void sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {

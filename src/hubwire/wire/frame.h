@@ -36,56 +36,69 @@ struct LinkCounters {
   uint16_t dropped;   // bad COBS, too short, or rejected by the layer above
 };
 
-// Decodes the incoming byte stream one byte at a time into a fixed buffer, COBS on the fly.
-class FrameReceiver {
+// Decodes the incoming byte stream one byte at a time into a fixed buffer, COBS on the fly. The
+// buffer is not kept here but passed to each call, and positions in it are indices: the session
+// shares one buffer with its writer (session.h), so it stores no pointers for this and its
+// constructor sets none. Index counts the buffer's bytes: uint8_t for a buffer of up to 255 bytes
+// (the session's, unless HUBWIRE_MAX_PAYLOAD is above 250), uint16_t for any. FrameReceiver below
+// is the same with a buffer of its own.
+template <typename Index>
+class FrameDecoderOf {
  public:
-  // buffer holds capacity raw bytes: HUBWIRE_RAW_FRAME_SIZE(largest accepted payload).
-  FrameReceiver(uint8_t* buffer, uint16_t capacity) : counters(), buf_(buffer), end_(buffer + capacity) { reset(); }
-  // A receiver without a buffer yet: value-initialised (FrameReceiver r{} or as a member of a
-  // value-initialised whole) it is all zero, and attach() then sets only its pointers.
-  FrameReceiver() = default;
+  // Value-initialised (as a member of a value-initialised whole) it is all zero: ready, nothing
+  // received.
+  FrameDecoderOf() = default;
 
-  // Gives a zeroed receiver its buffer.
-  void attach(uint8_t* buffer, uint16_t capacity) {
-    buf_ = at_ = buffer;
-    end_ = buffer + capacity;
-  }
-
-  // Takes one byte; true when it completed a valid frame, which frame() then describes.
-  // Most bytes are data inside a COBS block that fit the buffer: that case is a store and a count,
-  // always inline (the receive loop runs it per byte); the rest is feedSlow().
-  HUBWIRE_ALWAYS_INLINE bool feed(uint8_t byte) {
-    if (byte != 0 && left_ != 0) {
-      *at_++ = byte;
-      --left_;
+  // Takes one byte into buf, which holds cap raw bytes (HUBWIRE_RAW_FRAME_SIZE(largest accepted
+  // payload)), the same buf and cap at every call; true when it completed a valid frame, which
+  // frame(buf) then describes.
+  // Most bytes are data inside a COBS block that fit the buffer: that case is a compare and a
+  // store, always inline (the receive loop runs it per byte); the rest is feedSlow().
+  HUBWIRE_ALWAYS_INLINE bool feed(uint8_t byte, uint8_t* buf, Index cap) {
+    Index at = at_;
+    if (at != fitEnd_ && byte != 0) {
+      at_ = (Index)(at + 1);  // before the store through buf, which could alias it
+      buf[at] = byte;
       return false;
     }
-    return feedSlow(byte);
+    return feedSlow(byte, buf, cap);
   }
   // The frame, by value: its header is copied out, so an answer built in the same buffer cannot
   // change it. The payload stays in the buffer.
-  Frame frame() const { return Frame{buf_[0], buf_[1], buf_[2], frameLen_, buf_ + kFrameHeader}; }
-  // Forget any partial frame (the next byte starts a new one).
-  void reset();
+  Frame frame(const uint8_t* buf) const { return Frame{buf[0], buf[1], buf[2], frameLen_, buf + kFrameHeader}; }
+  // Forget any partial frame (the next byte starts a new one). Two callers in the session: one copy.
+  HUBWIRE_NOINLINE void reset();
   // No frame is partly received: the buffer holds nothing that is still needed.
   bool idle() const { return !started_; }
 
   LinkCounters counters;
 
  private:
-  HUBWIRE_NOINLINE bool feedSlow(uint8_t byte);
-  HUBWIRE_ALWAYS_INLINE bool judge(uint8_t byte);  // feedSlow()'s body
+  bool feedSlow(uint8_t byte, uint8_t* buf, Index cap);
   static const uint8_t kOverflowed = 0xFF;
 
-  uint8_t* buf_;
-  uint8_t* end_;         // just past the buffer
-  uint8_t* at_;          // where the next decoded byte goes
-  uint8_t left_;         // bytes of the current COBS block still to come that fit the buffer
-  uint8_t beyond_;       // ... and that do not (the frame overflows if one arrives); kOverflowed
-                         // once one did (a block holds at most 254)
+  Index at_;             // where the next decoded byte goes (bytes decoded so far)
+  Index fitEnd_;         // where the bytes of the current COBS block that fit the buffer end
+  uint8_t beyond_;       // bytes of the block still to come that do not fit (the frame overflows
+                         // if one arrives); kOverflowed once one did (a block holds at most 254)
   bool pendingZero_;     // the current block ends with an implied zero (code < 0xFF)
   bool started_;         // any byte since the last delimiter
   uint8_t frameLen_;     // payload length of the last completed frame
+};
+
+// A FrameDecoder with a buffer of its own (tests, tools, a hub written in C++).
+class FrameReceiver : public FrameDecoderOf<uint16_t> {
+ public:
+  // buffer holds capacity raw bytes: HUBWIRE_RAW_FRAME_SIZE(largest accepted payload).
+  FrameReceiver(uint8_t* buffer, uint16_t capacity) : FrameDecoderOf<uint16_t>(), buf_(buffer), cap_(capacity) {}
+
+  // Takes one byte; true when it completed a valid frame, which frame() then describes.
+  bool feed(uint8_t byte) { return FrameDecoderOf<uint16_t>::feed(byte, buf_, cap_); }
+  Frame frame() const { return FrameDecoderOf<uint16_t>::frame(buf_); }
+
+ private:
+  uint8_t* buf_;
+  uint16_t cap_;
 };
 
 // Header, CRC and COBS in place in buf (see FrameWriter), then one write of the frame (two past
