@@ -111,8 +111,10 @@ def run() -> None:
         else:
             lines.append([k, label, wire(k), f"{c[k]:,.0f}", f"{c[k] / F_CPU * 1e6:,.1f}", f"{c[k] / wire(k):,.0f}"])
 
-    # receive path per byte: heartbeats of 8, 10 and 32 payload bytes differ only in length
-    slope = (c[18] - c[6]) / (wire(18) - wire(6))
+    # receive path per data byte: the heartbeats of 8 and 32 payload bytes (regions 17, 18) differ
+    # only in length, and none of their payload bytes is zero. (Region 6's payload is mostly zeros,
+    # each a COBS code byte on the slow path: a slope from it would understate a data byte's cost.)
+    slope = (c[18] - c[17]) / (wire(18) - wire(17))
     feed_slope = (c[22] - c[20]) / (39 - 8)  # FrameReceiver alone, includes the CRC at the end
     crc_per_byte = c[23] / 35
     read_per_byte = c[24] / 8
@@ -149,7 +151,7 @@ the marks. Repeated regions (3 runs, new seq each) gave counts {steady}. 16 MHz:
 
 Derived:
 
-- **receive path per wire byte** (slope between the 17- and 39-byte heartbeats, nothing dispatched):
+- **receive path per wire byte** (slope between the 15- and 39-byte heartbeats of non-zero bytes, nothing dispatched):
   **{slope:.0f} cycles/byte**; of that, per byte: reading through `portRead()` -> `Stream`
   {read_per_byte:.0f} (the stub stream's own `read()` plus the loop: {stub_per_byte:.0f}), `FrameReceiver::feed()`
   {feed_slope:.0f} (COBS bookkeeping + the CRC at the delimiter; `crc16()` alone: {crc_per_byte:.1f}/byte),
