@@ -151,7 +151,7 @@ the marks. Repeated regions (3 runs, new seq each) gave counts {steady}. 16 MHz:
 
 Derived:
 
-- **receive path per wire byte** (slope between the 15- and 39-byte heartbeats of non-zero bytes, nothing dispatched):
+- **receive path per wire byte** (slope between the 15- and 39-byte heartbeats, payload bytes non-zero, nothing dispatched):
   **{slope:.0f} cycles/byte**; of that, per byte: reading through `portRead()` -> `Stream`
   {read_per_byte:.0f} (the stub stream's own `read()` plus the loop: {stub_per_byte:.0f}), `FrameReceiver::feed()`
   {feed_slope:.0f} (COBS bookkeeping + the CRC at the delimiter; `crc16()` alone: {crc_per_byte:.1f}/byte),
