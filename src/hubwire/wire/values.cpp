@@ -49,9 +49,16 @@ uint8_t listItems(TypeCode code) { return alignOf(elementOf(code)); }
 
 }  // namespace
 
-uint8_t scalarSize(TypeCode t) {  // arithmetic, not a switch: AVR keeps switch tables in RAM
-  if (t == kVoid || t > kF64) return 0;
-  return t <= kI8 ? 1 : t <= kI16 ? 2 : t <= kF32 ? 4 : 8;
+// Bytes per scalar type, void .. f64: a flash table read takes less code than comparisons.
+const uint8_t kScalarSizes[] HUBWIRE_FLASH = {0, 1, 1, 1, 2, 2, 4, 4, 4, 8};
+
+uint8_t scalarSize(TypeCode t) {
+  if (t > kF64) return 0;
+#if defined(__AVR__)
+  return pgm_read_byte(&kScalarSizes[t]);
+#else
+  return kScalarSizes[t];
+#endif
 }
 
 
