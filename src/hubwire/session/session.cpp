@@ -346,7 +346,9 @@ void Session::onControl(const Frame& f) {
   if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
-  memcpy(replyData_, tx().payload(), uses(kUsesReturns) ? len : 1);
+  // Without returns the answer is an ACK or a NAK: its code is all to keep (read back after an ACK).
+  if (uses(kUsesReturns)) memcpy(replyData_, tx().payload(), len);
+  else replyData_[0] = code;
   reply(type, len);
 }
 
