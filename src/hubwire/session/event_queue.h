@@ -23,7 +23,7 @@ class EventQueue {
   ///   if (!events.push(id, &value, sizeof(value))) { /* full: try again later */ }
   bool push(uint8_t id, const void* value, uint8_t size) {
     if (count_ >= HUBWIRE_EVENT_QUEUE) return false;
-    Entry& e = events_[(head_ + count_) % HUBWIRE_EVENT_QUEUE];
+    Entry& e = events_[(uint8_t)(head_ + count_) % HUBWIRE_EVENT_QUEUE];  // 8-bit: the sum fits
     e.id = id;
     e.len = size;
     memcpy(e.data, value, size);
