@@ -110,7 +110,8 @@ uint16_t ValueType::wireSize() const {
   if (uses(kUsesLists) && isListCode(code)) return (uint16_t)(1 + count * scalarSize(elementOf(code)));
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(1 + count);
   if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructWireSize, layout, nullptr, nullptr, 0);
-  return (uint16_t)(scalarSize(code) * (count ? count : 1));
+  uint8_t n = count ? count : 1;
+  return (uint16_t)(scalarSize(code) * n);  // two bytes: one 8x8 multiply on AVR
 }
 
 uint16_t ValueType::memSize() const {
