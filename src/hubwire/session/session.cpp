@@ -404,7 +404,7 @@ bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
 
 void Session::sendEvent(uint16_t now) {
   const EventQueue::Entry& e = events_.send(now);
-  memcpy(tx().payload(), e.data, e.len);
+  memcpy(tx().payload(), e.data, sizeof(e.data));  // the whole slot, a fixed size: copied inline
   send(kMsgEvent, events_.seq(), e.id, e.len);
 }
 
