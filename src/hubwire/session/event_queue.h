@@ -62,7 +62,7 @@ class EventQueue {
   bool acked(uint8_t seq, uint8_t id) {
     if (!inFlight_ || seq != seq_ || id != events_[head_].id) return false;
     inFlight_ = false;
-    head_ = (uint8_t)((head_ + 1) % HUBWIRE_EVENT_QUEUE);
+    head_ = (uint8_t)(head_ + 1) % HUBWIRE_EVENT_QUEUE;
     --count_;
     return true;
   }
