@@ -23,7 +23,7 @@ class EventQueue {
   ///   if (!events.push(id, &value, sizeof(value))) { /* full: try again later */ }
   bool push(uint8_t id, const void* value, uint8_t size) {
     if (count_ >= HUBWIRE_EVENT_QUEUE) return false;
-    Entry& e = events_[(head_ + count_) % HUBWIRE_EVENT_QUEUE];
+    Entry& e = events_[(uint8_t)(head_ + count_) % HUBWIRE_EVENT_QUEUE];  // 8-bit: the sum fits
     e.id = id;
     e.len = size;
     memcpy(e.data, value, size);
@@ -62,7 +62,7 @@ class EventQueue {
   bool acked(uint8_t seq, uint8_t id) {
     if (!inFlight_ || seq != seq_ || id != events_[head_].id) return false;
     inFlight_ = false;
-    head_ = (uint8_t)((head_ + 1) % HUBWIRE_EVENT_QUEUE);
+    head_ = (uint8_t)(head_ + 1) % HUBWIRE_EVENT_QUEUE;
     --count_;
     return true;
   }

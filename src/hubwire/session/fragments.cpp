@@ -30,7 +30,7 @@ void fragmentReceived(Session& s, const Frame& f) {
   if (offset == 0) {  // a new message: whatever was in progress is abandoned
     if (r) r->total = 0;
     if (total > capacity && total >= n) {
-      if (answered(type)) return s.sendNak(f, kErrBadLength);  // seq and id are the carried message's
+      if (answered(type)) return s.sendNak(kErrBadLength);  // seq and id are the carried message's
       ++s.rx_.counters.overflow;
       return;
     }

@@ -91,7 +91,7 @@ bool Session::hubFrame(const Frame& f) {
       return ours || f.type == kMsgResponse;  // a late answer to a retry is dropped
     }
     case kMsgEvent:
-      if (!linked_) return sendNak(f, kErrNotLinked), true;
+      if (!linked_) return sendNak(kErrNotLinked), true;
       hubEvent(f);
       return true;
     case kMsgControl:  // about to be answered (linked): the bind report, or a control to remember
@@ -139,17 +139,17 @@ void Session::hubAnswer(const Frame& f) {
 // A hub event: stored and its onChange run once; a retry (same seq and id) is acknowledged again.
 void Session::hubEvent(const Frame& f) {
   HubLink& l = hubLink;
-  if (l.eventValid && f.seq == l.eventSeq && f.id == l.eventId) return reply(kMsgAck, f, 0);
+  if (l.eventValid && f.seq == l.eventSeq && f.id == l.eventId) return reply(kMsgAck, 0);
   ChannelInfo ch;
-  if (!hubFind(f.id, ch) || !(ch.access & kEventAccess)) return sendNak(f, kErrUnknownChannel);
+  if (!hubFind(f.id, ch) || !(ch.access & kEventAccess)) return sendNak(kErrUnknownChannel);
   uint8_t code = ch.type.check(f.payload, f.len);
-  if (code != kOk) return sendNak(f, code);
+  if (code != kOk) return sendNak(code);
   ch.type.fromWire(f.payload, f.len, ch.data);
   if (ch.call) functionAt<void (*)()>(ch.call)();
   l.eventValid = true;
   l.eventSeq = f.seq;
   l.eventId = f.id;
-  reply(kMsgAck, f, 0);
+  reply(kMsgAck, 0);
 }
 
 // The bind report: [version, status of hub id 1..N]. A control like any other: its answer is kept,
@@ -163,7 +163,7 @@ void Session::hubBind(const Frame& f) {
   replyType_ = code == kOk ? kMsgAck : kMsgNak;
   replyLen_ = code == kOk ? 0 : 1;
   replyData_[0] = code;
-  if (code != kOk) return sendNak(f, code);
+  if (code != kOk) return sendNak(code);
   l.bound = true;
   l.bind.state = kBindOk;
   for (uint8_t k = 1; k <= l.count; ++k) {
@@ -173,7 +173,7 @@ void Session::hubBind(const Frame& f) {
     l.bind.code = f.payload[k];
     break;
   }
-  reply(kMsgAck, f, 0);
+  reply(kMsgAck, 0);
 }
 
 // Sends the head once the hub has bound this session, retries it, and gives up after

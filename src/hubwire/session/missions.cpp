@@ -47,10 +47,10 @@ bool Session::missionFrame(const Frame& f) {
   MissionState& m = *static_cast<MissionState*>(ch.data);
   uint8_t* out = tx().payload();  // the same bytes as f.payload: read before written
   if (f.type == kMsgRequest) {
-    if (f.len != 0) return sendNak(f, kErrBadLength), true;
+    if (f.len != 0) return sendNak(kErrBadLength), true;
     out[0] = m.run_;
     out[1] = m.running() ? 1 : 0;
-    return reply(kMsgResponse, f, 2), true;
+    return reply(kMsgResponse, 2), true;
   }
   uint8_t code = kOk;
   if (f.len == 0) {
@@ -82,7 +82,7 @@ bool Session::missionFrame(const Frame& f) {
   replyType_ = type;
   replyLen_ = len;
   replyData_[0] = out[0];
-  reply(type, f, len);
+  reply(type, len);
   return true;
 }
 

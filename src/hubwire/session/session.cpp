@@ -179,15 +179,15 @@ void Session::handle(const Frame& f) {
       if (HubwireLarge<true, void>::receive && f.type == kMsgFragment) return HubwireLarge<true, void>::receive(*this, f);
       if (hubHook(*this, true)) return;  // hub events, answers to the device's requests
       ++rx_.counters.dropped;
-      return sendNak(f, kErrUnknownType);
+      return sendNak(kErrUnknownType);
   }
-  if (!linked_) return sendNak(f, kErrNotLinked);
+  if (!linked_) return sendNak(kErrNotLinked);
   bool control = f.type == kMsgControl;
   if (control && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
     // a retried control: answer again, do not apply twice
     // Without returns an answer is an ACK or a NAK's code: one byte to keep, copied whole.
     memcpy(tx().payload(), replyData_, uses(kUsesReturns) ? replyLen_ : 1);
-    return reply(replyType_, f, replyLen_);
+    return reply(replyType_, replyLen_);
   }
   lastTxnControl_ = control;
   lastTxnSeq_ = f.seq;
@@ -208,7 +208,7 @@ void Session::handle(const Frame& f) {
 void Session::onHello(const Frame& f) {
   if (f.len < kHelloSize) {
     ++rx_.counters.dropped;
-    sendNak(f, kErrBadLength);
+    sendNak(kErrBadLength);
     return;
   }
   // Everything is read before the answer is written: it is built in the same buffer.
@@ -266,19 +266,19 @@ void Session::onAck(const Frame& f, bool nak) {
 void Session::onChunk(const Frame& f) {
   if (f.len != kChunkRequestSize) {
     if (hubHook(*this, true)) return;  // a chunk of the hub's descriptor (hub_link.cpp)
-    return sendNak(f, kErrBadLength);
+    return sendNak(kErrBadLength);
   }
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
   uint16_t total = table(&ChannelTable::jsonLength);
-  if (offset > total) return sendNak(f, kErrBadOffset);
+  if (offset > total) return sendNak(kErrBadOffset);
   uint16_t n = (uint16_t)(maxOut() - kChunkHeader);  // maxOut() >= 16: never wraps
   if (want < n) n = want;
   if (total - offset < n) n = (uint16_t)(total - offset);
   uint8_t* out = tx().payload();  // where the request is: its offset is already the answer's
   storeU16(out + 2, total);
   fromFlash(out + kChunkHeader, table(&ChannelTable::json) + offset, n);
-  reply(kMsgChunk, f, (uint8_t)(kChunkHeader + n));
+  reply(kMsgChunk, (uint8_t)(kChunkHeader + n));
 }
 
 void Session::onRequest(const Frame& f) {
@@ -287,17 +287,17 @@ void Session::onRequest(const Frame& f) {
     // Id 0 is the link itself: reading it asks for the board id (at most 16 bytes, which every
     // hub accepts), where the board has one.
     uint8_t n = f.id == 0 && f.len == 0 ? portBoardId(port_, tx().payload()) : 0;
-    if (n) return reply(kMsgResponse, f, n);
-    return sendNak(f, kErrUnknownChannel);
+    if (n) return reply(kMsgResponse, n);
+    return sendNak(kErrUnknownChannel);
   }
-  if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(f, kErrNotReadable);
+  if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(kErrNotReadable);
   // Not sent at all when the hub could not take it (its hello said how much it accepts), unless
   // it may go as fragments (fragments.cpp).
   if (f.len != 0 || (uses(kUsesWide) && !HubwireLarge<true, void>::send && ch.type.wireSize() > maxOut()))
-    return sendNak(f, kErrBadLength);
+    return sendNak(kErrBadLength);
   if (HubwireLarge<true, void>::send)
     return (void)HubwireLarge<true, void>::send(*this, kMsgResponse, f.seq, f.id, ch, nullptr, 0, false);
-  reply(kMsgResponse, f, (uint8_t)ch.type.toWire(ch.data, tx().payload()));
+  reply(kMsgResponse, (uint8_t)ch.type.toWire(ch.data, tx().payload()));
 }
 
 void Session::onControl(const Frame& f) {
@@ -346,25 +346,27 @@ void Session::onControl(const Frame& f) {
   if (hubHook(*this, true)) return;  // the bind report (C id 0); the hub link notes every control
   replyType_ = type;
   replyLen_ = len;
-  memcpy(replyData_, tx().payload(), uses(kUsesReturns) ? len : 1);
-  reply(type, f, len);
+  // Without returns the answer is an ACK or a NAK: its code is all to keep (read back after an ACK).
+  if (uses(kUsesReturns)) memcpy(replyData_, tx().payload(), len);
+  else replyData_[0] = code;
+  reply(type, len);
 }
 
 void Session::onSubscribe(const Frame& f) {
   ChannelInfo ch;
-  if (!find(f.id, ch)) return sendNak(f, kErrUnknownChannel);
-  if (!uses(kUsesStreams) || !(ch.access & kStreamable)) return sendNak(f, kErrNotStreamable);
+  if (!find(f.id, ch)) return sendNak(kErrUnknownChannel);
+  if (!uses(kUsesStreams) || !(ch.access & kStreamable)) return sendNak(kErrNotStreamable);
   if (f.len != 2 || (uses(kUsesWide) && !HubwireLarge<true, void>::send && ch.type.wireSize() + kSampleHeader > maxOut()))
-    return sendNak(f, kErrBadLength);
+    return sendNak(kErrBadLength);
   uint16_t interval = loadU16(f.payload);
 #if HUBWIRE_MAX_STREAMS > 0
   // Timed by update()'s clock read, as the frame is: the first sample's time since is from then.
-  if (!streams_.subscribe(f.id, interval, lastRx_)) return sendNak(f, kErrBusy);
+  if (!streams_.subscribe(f.id, interval, lastRx_)) return sendNak(kErrBusy);
 #else
-  if (interval != 0) return sendNak(f, kErrBusy);
+  if (interval != 0) return sendNak(kErrBusy);
 #endif
   storeU16(tx().payload(), interval);
-  reply(kMsgAck, f, 2);
+  reply(kMsgAck, 2);
 }
 
 void Session::sendSamples(uint16_t now) {
@@ -402,7 +404,7 @@ bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
 
 void Session::sendEvent(uint16_t now) {
   const EventQueue::Entry& e = events_.send(now);
-  memcpy(tx().payload(), e.data, e.len);
+  memcpy(tx().payload(), e.data, sizeof(e.data));  // the whole slot, a fixed size: copied inline
   send(kMsgEvent, events_.seq(), e.id, e.len);
 }
 
@@ -433,11 +435,14 @@ void Session::sendHeartbeat(uint16_t now) {
   beatSent_ = true;
 }
 
-void Session::sendNak(const Frame& f, uint8_t code) {
+void Session::sendNak(uint8_t code) {
   tx().payload()[0] = code;
-  reply(kMsgNak, f, 1);
+  reply(kMsgNak, 1);
 }
 
-void Session::reply(uint8_t type, const Frame& f, uint8_t len) { send(type, f.seq, f.id, len); }
+// The frame answered is still in the buffer: its header lies before the payload the answer is
+// built in (a reassembled value's last fragment carries its seq and id). Read there, at constant
+// addresses: a frame's address passed to every answer cost more.
+void Session::reply(uint8_t type, uint8_t len) { send(type, frameBuf_[2], frameBuf_[3], len); }
 
 }  // namespace hubwire

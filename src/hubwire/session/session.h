@@ -303,13 +303,13 @@ class Session : private SessionState {
   void sendEvent(uint16_t now);
   uint16_t ms() { return (uint16_t)portMillis(port_); }
   void sendSamples(uint16_t now);
-  void sendNak(const Frame& f, uint8_t code);
+  void sendNak(uint8_t code);  // answers the frame received with a NAK (reply())
   // Every frame of the device goes out here: one call with four byte arguments at each sender
   // instead of the port and buffer loaded at each (out of line: Uno flash -98 B in Minimal).
   HUBWIRE_NOINLINE void send(uint8_t type, uint8_t seq, uint8_t id, uint8_t len) {
     tx().send(port_, type, seq, id, len);
   }
-  void reply(uint8_t type, const Frame& f, uint8_t len);
+  void reply(uint8_t type, uint8_t len);  // answers the frame received: its seq and id
   uint8_t maxOut() const { return peerMax_; }
 
   // The receiver's part of frameBuf_: the writer's code byte and delimiter lie around it.

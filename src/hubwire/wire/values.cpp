@@ -49,9 +49,16 @@ uint8_t listItems(TypeCode code) { return alignOf(elementOf(code)); }
 
 }  // namespace
 
-uint8_t scalarSize(TypeCode t) {  // arithmetic, not a switch: AVR keeps switch tables in RAM
-  if (t == kVoid || t > kF64) return 0;
-  return t <= kI8 ? 1 : t <= kI16 ? 2 : t <= kF32 ? 4 : 8;
+// Bytes per scalar type, void .. f64: a flash table read takes less code than comparisons.
+const uint8_t kScalarSizes[] HUBWIRE_FLASH = {0, 1, 1, 1, 2, 2, 4, 4, 4, 8};
+
+uint8_t scalarSize(TypeCode t) {
+  if (t > kF64) return 0;
+#if defined(__AVR__)
+  return pgm_read_byte(&kScalarSizes[t]);
+#else
+  return kScalarSizes[t];
+#endif
 }
 
 
@@ -103,7 +110,8 @@ uint16_t ValueType::wireSize() const {
   if (uses(kUsesLists) && isListCode(code)) return (uint16_t)(1 + count * scalarSize(elementOf(code)));
   if (uses(kUsesStrings) && code == kStr) return (uint16_t)(1 + count);
   if (uses(kUsesStructs) && code == kStruct) return sketchStructCodec(kStructWireSize, layout, nullptr, nullptr, 0);
-  return (uint16_t)(scalarSize(code) * (count ? count : 1));
+  uint8_t n = count ? count : 1;
+  return (uint16_t)(scalarSize(code) * n);  // two bytes: one 8x8 multiply on AVR
 }
 
 uint16_t ValueType::memSize() const {
