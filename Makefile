@@ -47,7 +47,7 @@ test-avr-core:
 	@mkdir -p $(BUILD)/avr-core
 	@for f in $(CORE_SOURCES); do \
 	  avr-g++ -std=gnu++11 -mmcu=atmega328p -Os -Wall -Wextra -Werror -fno-exceptions -fno-rtti \
-	    -c $$f -o $(BUILD)/avr-core/$$(basename $$f).o || exit 1; \
+	    -Itest/support -DHUBWIRE_PORT_HEADER='"port_bare.h"' -c $$f -o $(BUILD)/avr-core/$$(basename $$f).o || exit 1; \
 	done
 	@echo "test-avr-core: $(words $(CORE_SOURCES)) files compile for atmega328p with -Wall -Wextra -Werror"
 

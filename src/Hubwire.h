@@ -34,19 +34,9 @@
 #include <Arduino.h>
 
 #include "hubwire/channels/declare.h"
-#include "hubwire/session/session.h"
+#include "hubwire/session/session.h"  // with hubwire::Port, the binding (hubwire/port_arduino.h)
 
 namespace hubwire {
-
-// The core's seam bound to an Arduino Stream and millis() (functions in HubwireArduino.cpp).
-class Port {
- public:
-  /// The port over stream; Hubwire makes its own, a sketch need not.
-  ///   hubwire::Port port(Serial);
-  explicit Port(Stream& s) : stream(s), mostRoom(0) {}
-  Stream& stream;
-  uint8_t mostRoom;  // the most availableForWrite() has reported (255 and more count as 255)
-};
 
 /// Seeds the session nonce: differs between resets (a counter that survives them) and, where the
 /// board has one, comes from a hardware RNG. See Session::begin().
@@ -59,7 +49,7 @@ class Hubwire : public hubwire::Session {
  public:
   /// A hub link over any Stream: Serial, Serial1, SoftwareSerial, a USB CDC port, a WiFi client.
   ///   Hubwire hub(Serial);
-  explicit Hubwire(Stream& stream) : hubwire::Session(ownPort_), ownPort_(stream) {}
+  explicit Hubwire(Stream& stream) : hubwire::Session(hubwire::Port(stream)) {}  // the session keeps the Port
   // One Hubwire per Stream: a copy would share the Stream and answer the hub twice.
   Hubwire(const Hubwire&) = delete;
   Hubwire& operator=(const Hubwire&) = delete;
@@ -67,11 +57,6 @@ class Hubwire : public hubwire::Session {
   /// Starts talking, with the channels HUBWIRE_CHANNELS declared; false for an empty table.
   ///   void setup() { Serial.begin(115200); hub.begin(channels); }
   bool begin(const hubwire::ChannelTable& channels) { return hubwire::Session::begin(channels, hubwire::bootNonce()); }
-
- private:
-  // After the session, which only keeps a reference to it: the session's zeroing then starts at
-  // the object's own address, which the global constructors hold in a register already (-6 B).
-  hubwire::Port ownPort_;
 };
 
 #endif

@@ -1,8 +1,11 @@
 // The seam through which the portable core reaches the outside world: a byte stream and a clock.
 // Each program links exactly one binding that defines class Port and the functions below: the
-// Arduino face binds them to a Stream and millis() (src/HubwireArduino.cpp), tests to fakes
-// (test/support), the fuzzer to its input. Plain functions bound at link time, not virtual ones:
-// AVR keeps vtables in RAM and pays an indirect call per byte.
+// Arduino face binds them to a Stream and millis() (port_arduino.h, src/HubwireArduino.cpp), tests
+// to fakes (test/support), the fuzzers to their input. Plain functions bound at link time, not
+// virtual ones: AVR keeps vtables in RAM and pays an indirect call per byte. The session holds its
+// Port by value (one load fewer per use than through a reference: Uno flash -26 B in Minimal), so
+// the binding's header is included here: HUBWIRE_PORT_HEADER where the build names one, else the
+// Arduino binding's. A Port is copied into the session: it refers to its stream, not owns it.
 #ifndef HUBWIRE_PORT_H
 #define HUBWIRE_PORT_H
 
@@ -12,6 +15,16 @@
 namespace hubwire {
 
 class Port;  // defined by the binding
+
+}  // namespace hubwire
+
+#if defined(HUBWIRE_PORT_HEADER)
+#include HUBWIRE_PORT_HEADER
+#elif defined(ARDUINO)
+#include "port_arduino.h"
+#endif
+
+namespace hubwire {
 
 // Next received byte, or -1 when none is waiting. Must not block.
 int portRead(Port& port);

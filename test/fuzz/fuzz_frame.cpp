@@ -17,7 +17,6 @@
 using namespace hubwire;
 
 // The core links FrameWriter, which writes through the port seam: a binding that discards.
-class hubwire::Port {};
 int hubwire::portRead(Port&) { return -1; }
 void hubwire::portWrite(Port&, const uint8_t*, size_t) {}
 size_t hubwire::portWritable(Port&) { return 0; }

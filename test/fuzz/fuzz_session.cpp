@@ -40,19 +40,12 @@ namespace {
 
 }  // namespace
 
-// The fuzzer's binding of the core's seam: input from the fuzz data, a clock it advances.
-class hubwire::Port {
- public:
-  std::vector<uint8_t> in, out;
-  size_t pos = 0;
-  size_t room = 4096;
-  uint32_t now = 0;
-};
-int hubwire::portRead(Port& p) { return p.pos < p.in.size() ? p.in[p.pos++] : -1; }
-void hubwire::portWrite(Port& p, const uint8_t* data, size_t len) { p.out.insert(p.out.end(), data, data + len); }
-size_t hubwire::portWritable(Port& p) { return p.room; }
-uint32_t hubwire::portMillis(Port& p) { return p.now; }
-uint32_t hubwire::portMicros(Port& p) { return p.now * 1000u; }
+// The fuzzer's binding of the core's seam (fuzz_port.h): input from the fuzz data, a clock it advances.
+int hubwire::portRead(Port& p) { return p.line.pos < p.line.in.size() ? p.line.in[p.line.pos++] : -1; }
+void hubwire::portWrite(Port& p, const uint8_t* data, size_t len) { p.line.out.insert(p.line.out.end(), data, data + len); }
+size_t hubwire::portWritable(Port& p) { return p.line.room; }
+uint32_t hubwire::portMillis(Port& p) { return p.line.now; }
+uint32_t hubwire::portMicros(Port& p) { return p.line.now * 1000u; }
 uint8_t hubwire::portBoardId(Port&, uint8_t*) { return 0; }
 
 namespace {
@@ -157,7 +150,7 @@ void resetState() {
   missionLink = MissionLink();
 }
 
-void checkOutput(Port& s) {
+void checkOutput(FuzzLine& s) {
   static uint8_t buf[HUBWIRE_RAW_FRAME_SIZE(255)];
   FrameReceiver rx(buf, sizeof(buf));
   for (uint8_t b : s.out) {
@@ -168,7 +161,7 @@ void checkOutput(Port& s) {
   s.out.clear();
 }
 
-void step(Session& d, Port& s) {
+void step(Session& d, FuzzLine& s) {
   d.update();
   CHECK(d.eventsQueued() <= HUBWIRE_EVENT_QUEUE);
   checkOutput(s);
@@ -179,11 +172,11 @@ void step(Session& d, Port& s) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   resetState();
-  Port s;
-
+  FuzzLine s;
   s.now = 1000;
   s.room = (size_t)(data[0] >> 1) * 4;
-  Session d(s);
+  Port port(s);
+  Session d(port);
   bool ok = d.begin(channels, 0x12345678);
   CHECK(ok);
   checkOutput(s);

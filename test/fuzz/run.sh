@@ -29,13 +29,14 @@ esac
 HARNESSES=(frame session)
 CORE=("$ROOT"/src/hubwire/*.cpp "$ROOT"/src/hubwire/wire/*.cpp "$ROOT"/src/hubwire/session/*.cpp)
 FLAGS=(-std=c++11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
-       -fno-omit-frame-pointer -Wall -Wextra -I"$ROOT/src")
+       -fno-omit-frame-pointer -Wall -Wextra -I"$ROOT/src" -I"$ROOT/test/fuzz"
+       -DHUBWIRE_PORT_HEADER='"fuzz_port.h"')
 mkdir -p "$OUT/artifacts"
 
 build() {
   local h=$1 bin="$OUT/fuzz_$1" src="$ROOT/test/fuzz/fuzz_$1.cpp"
   local newest
-  newest=$(ls -t "$src" "${CORE[@]}" "$ROOT"/src/hubwire/*.h "$ROOT"/src/hubwire/*/*.h | head -1)
+  newest=$(ls -t "$src" "$ROOT/test/fuzz/fuzz_port.h" "${CORE[@]}" "$ROOT"/src/hubwire/*.h "$ROOT"/src/hubwire/*/*.h | head -1)
   if [[ -x "$bin" && "$bin" -nt "$newest" ]]; then return 0; fi
   "$CXX" "${FLAGS[@]}" "$src" "${CORE[@]}" -o "$bin.tmp" && mv "$bin.tmp" "$bin"
 }

@@ -37,7 +37,7 @@ struct Board {
 
 TEST(BoardId, ABoardWithAnIdAnswersWithIt) {
   Board b;
-  b.port.boardId = hex("0a1b2c3d4e5f");
+  b.stream.boardId = hex("0a1b2c3d4e5f");
   b.link();
   RxFrame f = b.readId(4);
   EXPECT_EQ(f.type, 'r');
@@ -56,7 +56,7 @@ TEST(BoardId, ABoardWithoutOneAnswersUnknownChannel) {
 
 TEST(BoardId, AReadWithAPayloadOrBeforeTheHandshakeIsRefused) {
   Board b;
-  b.port.boardId = hex("01");
+  b.stream.boardId = hex("01");
   RxFrame f = b.readId(6);  // not linked yet
   EXPECT_EQ(f.payload, Bytes(1, kErrNotLinked));
   b.link();

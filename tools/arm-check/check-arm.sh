@@ -53,9 +53,10 @@ for cpu in "${CPUS[@]}"; do
 		compile "$cpu" arduino "$ROOT/$s" "$OUT/$cpu/arduino/${s%.cpp}.o" \
 			-DARDUINO=10819 -I"$SCRIPT_DIR/include" -I"$ROOT/src"
 	done
-	# 2. the portable core alone: no Arduino.h reachable
+	# 2. the portable core alone: no Arduino.h reachable (a bare Port, which the session holds)
 	for s in "${CORE_SRCS[@]}"; do
-		compile "$cpu" core "$ROOT/$s" "$OUT/$cpu/core/${s%.cpp}.o" -I"$ROOT/src"
+		compile "$cpu" core "$ROOT/$s" "$OUT/$cpu/core/${s%.cpp}.o" -I"$ROOT/src" \
+			-I"$ROOT/test/support" -DHUBWIRE_PORT_HEADER='"port_bare.h"'
 	done
 	# 3. a sketch using the public API
 	if [ $HAVE_SKETCH = 1 ]; then

@@ -22,7 +22,7 @@ __attribute__((always_inline)) static inline bool missionHook(Session& s, uint8_
   return HubwireMissions<true, void>::dispatch && HubwireMissions<true, void>::dispatch(s, what);
 }
 
-Session::Session(Port& port)
+Session::Session(const Port& port)
     : SessionState(),  // all zero
       port_(port) {
   peerMax_ = kHelloSize;  // all a hub not yet heard is sure to accept (PROTOCOL.md 3.1)

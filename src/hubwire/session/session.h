@@ -97,9 +97,10 @@ struct SessionState {
 
 class Session : private SessionState {
  public:
-  /// A session over a port (port.h); the Arduino face binds it to a Stream (Hubwire.h).
+  /// A session over a port (port.h), which it keeps a copy of; the Arduino face binds it to a
+  /// Stream (Hubwire.h).
   ///   hubwire::Session session(port);
-  explicit Session(Port& port);
+  explicit Session(const Port& port);
   // One session per port: a copy would answer the same hub twice.
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -316,7 +317,7 @@ class Session : private SessionState {
   uint8_t* rxBuf() { return frameBuf_ + 1; }
   Frame received() const { return rx_.frame(frameBuf_ + 1); }  // the frame feed() completed
 
-  Port& port_;
+  Port port_;
   // The writer over frameBuf_: made where it is used, so the session stores no pointer for it.
   BasicFrameWriter<HUBWIRE_MAX_PAYLOAD> tx() { return BasicFrameWriter<HUBWIRE_MAX_PAYLOAD>(frameBuf_); }
 };
