@@ -22,7 +22,7 @@ RX_TARGET = 100  # cycles per data byte from the Stream into the frame buffer (r
 # region -> (label, payload bytes of the frame fed to hub.update(), or None for a part measured alone)
 REGIONS = {
     1: ("calibration (two marks, nothing between)", None),
-    2: ("begin(): Rover's table copied from flash, event ids set", None),
+    2: ("begin(): event ids set (the table is a constant)", None),
     3: ("hub hello -> link up + hello reply", 16),
     4: ("first update() after link-up (sends a heartbeat)", None),
     5: ("idle update(), nothing received", None),

@@ -103,7 +103,7 @@ void setup() {
   markEnd(1);
 
   // 2: begin(): the 12 declarations were checked and the descriptor hashed when this sketch
-  // compiled; begin() copies the table from flash and gives the event its id (it sends nothing)
+  // compiled; begin() gives the event its id (it copies nothing and sends nothing)
   markStart(2);
   bool ok = hub.begin(channels);
   markEnd(2);
