@@ -126,8 +126,9 @@ void Session::update() {
   if (!started_) return;
   uint8_t i = 0;
   uint16_t start = ms();  // when the frames read below are taken to have come
+  Port port = port_;  // the stream kept in registers across the loop: no loads per byte
   for (; i < kMaxBytesPerUpdate; ++i) {
-    int c = portRead(port_);
+    int c = portRead(port);
     if (c < 0) break;
     if (rx_.feed((uint8_t)c, rxBuf(), kRxCapacity)) {
       lastRx_ = start;
