@@ -32,12 +32,7 @@ void Session::applyFailsafes() {
   for (uint8_t id = 1; id <= count; ++id) {
     ChannelInfo ch;
     if (!find(id, ch) || !(ch.flags & kHasFailsafe)) continue;
-    Scalar fs;
-#if defined(__AVR__)
-    fs.bits = pgm_read_dword(&ch.limits->failsafe);  // inline: memcpy_P is a call
-#else
-    flashCopy(&fs, &ch.limits->failsafe, sizeof(fs));
-#endif
+    Scalar fs = flashRead(&ch.limits->failsafe);
     if (!uses(kUsesControlFailsafes) || ch.data) {
       uint8_t n = ch.type.count ? ch.type.count : 1;
       uint8_t size = scalarSize(ch.type.code);

@@ -10,14 +10,6 @@ HubLink hubLink;
 
 namespace {
 const uint16_t kHubGiveUpMs = (uint16_t)HUBWIRE_HUB_RETRY_MS * HUBWIRE_HUB_TRIES;
-
-void readFlash(void* to, const void* from, size_t n) {
-#if defined(__AVR__)
-  memcpy_P(to, from, n);
-#else
-  memcpy(to, from, n);
-#endif
-}
 }  // namespace
 
 void deliverChunk(HubDone fn, const uint8_t* data, uint8_t len) {
@@ -40,7 +32,7 @@ bool hubDispatch(Session& s, bool frame) {
 bool Session::hubMine() {
   if (hubLink.owner == this) return true;
   HubTable t;
-  readFlash(&t, hubTable(), sizeof(t));
+  flashCopy(&t, hubTable(), sizeof(t));
   // In a program with one table (sketchTable) the hub channels are that table's.
   if (!started_ || (!sketchTable.count && t.owner != table(&ChannelTable::channels))) return false;
   memset(&hubLink, 0, sizeof(hubLink));
@@ -229,7 +221,7 @@ void Session::hubPoll(uint16_t now) {
 
 bool Session::hubFind(uint8_t id, ChannelInfo& ch) {
   if (id == 0 || id > hubLink.count) return false;
-  readFlash(&ch, &hubLink.channels[id - 1], sizeof(ch));
+  flashCopy(&ch, &hubLink.channels[id - 1], sizeof(ch));
   return true;
 }
 

@@ -32,12 +32,8 @@ bool Session::begin(const ChannelTable& channels, uint32_t seed) {
   // Events learn their ids: emit() names the event by its handle.
   const ChannelInfo* record = table(&ChannelTable::channels);
   for (uint8_t id = 1; uses(kUsesEvents) && id <= count; ++id, ++record) {
-#if defined(__AVR__)
-    // two fields read inline: memcpy_P of the whole record is a call and a frame on the stack
-    if (pgm_read_byte(&record->access) & kEventAccess) *(uint8_t*)pgm_read_word(&record->data) = id;
-#else
-    if (record->access & kEventAccess) *(uint8_t*)record->data = id;
-#endif
+    // two fields read, not the whole record
+    if (flashRead(&record->access) & kEventAccess) *(uint8_t*)flashRead(&record->data) = id;
   }
   nonce_ = seed;  // until drawNonce() mixes in the moment the hub is first heard
   nonceDrawn_ = false;
@@ -124,8 +120,8 @@ void Session::handle(const Frame& f) {
   if (!linked_) return sendNak(kErrNotLinked);
   bool control = f.type == kMsgControl;
   if (control && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
-    // a retried control: answer again, do not apply twice
-    // Without returns an answer is an ACK or a NAK's code: one byte to keep, copied whole.
+    // a retried control: answer again, do not apply twice (without returns the answer kept is
+    // one byte, an ACK's or a NAK's code)
     memcpy(tx().payload(), replyData_, uses(kUsesReturns) ? replyLen_ : 1);
     return reply(replyType_, replyLen_);
   }

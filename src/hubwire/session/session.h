@@ -41,8 +41,6 @@ struct Same {
   typedef T type;
 };
 
-// Everything a Session changes while it runs, kept apart from its references so that one
-// value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
 // The receiver's part of the frame buffer (frameBuf_ less the writer's code byte and delimiter),
 // counted in one byte where it fits (16 bits cost ~46 B more code on AVR).
 #if HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD) <= 255
@@ -51,6 +49,9 @@ typedef uint8_t RxIndex;
 typedef uint16_t RxIndex;
 #endif
 const RxIndex kRxCapacity = HUBWIRE_RAW_FRAME_SIZE(HUBWIRE_MAX_PAYLOAD);
+
+// Everything a Session changes while it runs, kept apart from its port so that one
+// value-initialisation zeroes it all (a loop, instead of a store per member on AVR).
 
 struct SessionState {
   // Flags, a byte each: each read-modify-write of a bit cost more flash than the bytes they take
@@ -276,14 +277,7 @@ class Session : private SessionState {
   // (channel.h), which the compiler folds into the code; else read from flash where table_ points.
   template <typename T>
   HUBWIRE_ALWAYS_INLINE T table(T ChannelTable::*field) const {
-    if (sketchTable.count) return sketchTable.*field;
-    T v;
-#if defined(__AVR__)
-    memcpy_P(&v, &(table_->*field), sizeof(v));
-#else
-    v = table_->*field;
-#endif
-    return v;
+    return sketchTable.count ? sketchTable.*field : flashRead(&(table_->*field));
   }
   bool find(uint8_t id, ChannelInfo& ch);  // ch describes channel id afterwards
   void applyFailsafes();

@@ -80,8 +80,8 @@ void sendFrame(Port& out, uint8_t* buf, uint8_t type, uint8_t seq, uint8_t id, u
   uint8_t* end = raw + n + 2;
   uint8_t run = 1;
   for (uint8_t* p = raw; p != end; ++p, ++run) {
-    if (kLongBlocks && run == 0xFF) {  // 254 data bytes: a full block, no implied zero; the next block's code
-      *code = 0xFF;     // goes where its last byte was, once that is written
+    if (kLongBlocks && run == 0xFF) {  // 254 data bytes: a full block, no implied zero; the next
+      *code = 0xFF;                     // block's code goes where its last byte was, once written
       portWrite(out, from, (size_t)(p - from));
       from = code = p - 1;
       run = 1;
