@@ -1,8 +1,14 @@
-// A string that lives either in RAM or, on AVR, in flash; read one character at a time.
+// Constants in flash: a string that lives either in RAM or, on AVR, in flash, read one character
+// at a time; the sections that keep constants in flash (HUBWIRE_FLASH, HUBWIRE_FOLDED); reading
+// them back (flashCopy, flashRead).
 #ifndef HUBWIRE_TEXT_H
 #define HUBWIRE_TEXT_H
 
+#include <stddef.h>
 #include <stdint.h>
+#include <string.h>
+
+#include "config.h"
 
 #if defined(__AVR__)
 #include <avr/pgmspace.h>
@@ -56,6 +62,45 @@ inline Text flashText(const char* s) { return Text(s, true); }
 #else
 #define HUBWIRE_FOLDED(name) HUBWIRE_RODATA __attribute__((aligned(2)))
 #endif
+
+// Copies n bytes of a table's flash (HUBWIRE_FLASH) into RAM.
+inline void flashCopy(void* to, const void* from, size_t n) {
+#if defined(__AVR__)
+  memcpy_P(to, from, n);
+#else
+  memcpy(to, from, n);
+#endif
+}
+
+// One field of a table's flash (a byte, a word or a double word): on AVR read inline with
+// pgm_read_*, where memcpy_P is a call and a frame on the stack.
+#if defined(__AVR__)
+template <size_t N>
+struct FlashBits;
+template <>
+struct FlashBits<1> {
+  static uint8_t read(const void* at) { return pgm_read_byte(at); }
+};
+template <>
+struct FlashBits<2> {
+  static uint16_t read(const void* at) { return pgm_read_word(at); }
+};
+template <>
+struct FlashBits<4> {
+  static uint32_t read(const void* at) { return pgm_read_dword(at); }
+};
+#endif
+template <typename T>
+HUBWIRE_ALWAYS_INLINE T flashRead(const T* at) {
+#if defined(__AVR__)
+  auto bits = FlashBits<sizeof(T)>::read(at);
+  T v;
+  memcpy(&v, &bits, sizeof(v));
+  return v;
+#else
+  return *at;
+#endif
+}
 
 }  // namespace hubwire
 

@@ -49,45 +49,6 @@ struct RemoteAction<R()> {
 // Returns false when the function refused the value (controls returning bool).
 typedef bool (*Thunk)(const void* call, const uint8_t* arg, uint8_t* ret);
 
-// Copies n bytes of a table's flash (HUBWIRE_FLASH) into RAM.
-inline void flashCopy(void* to, const void* from, size_t n) {
-#if defined(__AVR__)
-  memcpy_P(to, from, n);
-#else
-  memcpy(to, from, n);
-#endif
-}
-
-// One field of a table's flash (a byte, a word or a double word): on AVR read inline with
-// pgm_read_*, where memcpy_P is a call and a frame on the stack.
-#if defined(__AVR__)
-template <size_t N>
-struct FlashBits;
-template <>
-struct FlashBits<1> {
-  static uint8_t read(const void* at) { return pgm_read_byte(at); }
-};
-template <>
-struct FlashBits<2> {
-  static uint16_t read(const void* at) { return pgm_read_word(at); }
-};
-template <>
-struct FlashBits<4> {
-  static uint32_t read(const void* at) { return pgm_read_dword(at); }
-};
-#endif
-template <typename T>
-HUBWIRE_ALWAYS_INLINE T flashRead(const T* at) {
-#if defined(__AVR__)
-  auto bits = FlashBits<sizeof(T)>::read(at);
-  T v;
-  memcpy(&v, &bits, sizeof(v));
-  return v;
-#else
-  return *at;
-#endif
-}
-
 template <typename F>
 F functionAt(const void* call) {
   return flashRead(static_cast<const F*>(call));

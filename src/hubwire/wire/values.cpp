@@ -54,11 +54,7 @@ const uint8_t kScalarSizes[] HUBWIRE_FLASH = {0, 1, 1, 1, 2, 2, 4, 4, 4, 8};
 
 uint8_t scalarSize(TypeCode t) {
   if (t > kF64) return 0;
-#if defined(__AVR__)
-  return pgm_read_byte(&kScalarSizes[t]);
-#else
-  return kScalarSizes[t];
-#endif
+  return flashRead(&kScalarSizes[t]);
 }
 
 
