@@ -203,6 +203,8 @@ def test_an_update_right_behind_the_start_answer_reaches_the_run() -> None:
     with MissionDevice(report_at_start=f32(0.0)) as dev, connect(dev) as d:
         for i in range(5):
             job = d.start("drive", 1.0)
+            # the report is acked before the board finishes: a final replaces a progress not yet sent
+            assert wait_for(dev.idle, 15)
             dev.finish(DRIVE, f32(1.0))
             assert job.result(timeout=5) == 1.0
             assert list(job.feedback(timeout=5)) == [0.0]
