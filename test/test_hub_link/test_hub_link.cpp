@@ -280,7 +280,8 @@ TEST_F(HubLinkTest, EventsAndRequestsShareOneCounter) {
   auto r = only(out, kMsgRequest);
   ASSERT_EQ(e.size(), 1u);
   ASSERT_EQ(r.size(), 1u);
-  EXPECT_EQ(r[0].seq, (uint8_t)(e[0].seq + 1));  // one counter: never the same seq outstanding
+  // one counter: never the same seq outstanding (the request is numbered first in an update)
+  EXPECT_EQ(e[0].seq, (uint8_t)(r[0].seq + 1));
   sendFrame(stream, kMsgAck, e[0].seq, e[0].id);
   sendFrame(stream, kMsgResponse, r[0].seq, 1, le(1.0f));
   step();
@@ -289,7 +290,7 @@ TEST_F(HubLinkTest, EventsAndRequestsShareOneCounter) {
   ASSERT_TRUE(device.emit(overheat, 2));
   auto e2 = only(step(), kMsgEvent);
   ASSERT_EQ(e2.size(), 1u);
-  EXPECT_EQ(e2[0].seq, (uint8_t)(r[0].seq + 1));
+  EXPECT_EQ(e2[0].seq, (uint8_t)(e[0].seq + 1));
   // A retried event keeps its seq while requests go on.
   device.request(setpoint);
   auto out2 = step(HUBWIRE_EVENT_RETRY_MS);

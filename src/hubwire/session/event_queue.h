@@ -69,7 +69,7 @@ class EventQueue {
 
   /// Is the head sent and waiting for its answer?
   bool inFlight() const { return inFlight_; }
-  /// The next head sent takes seq s (where one counter numbers more than events: hub_link.cpp).
+  /// The next head sent takes seq s (where one counter numbers more than events: txn.cpp).
   void nextSeqIs(uint8_t s) { seq_ = (uint8_t)(s - 1); }
 
   /// Makes the head due at once (its seq kept: the hub may have it already), as after a new link.

@@ -20,6 +20,11 @@ __attribute__((always_inline)) static inline bool missionHook(Session& s, uint8_
   return HubwireMissions<true, void>::dispatch && HubwireMissions<true, void>::dispatch(s, what);
 }
 
+// Does one counter number more than the sketch's events (txn.cpp)? Only with missions or hub channels.
+__attribute__((always_inline)) static inline bool sharedCounter() {
+  return HubwireHub<true, void>::dispatch || HubwireMissions<true, void>::dispatch;
+}
+
 }  // namespace hubwire
 
 #endif

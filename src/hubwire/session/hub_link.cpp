@@ -53,6 +53,7 @@ void Session::hubSessionCheck() {
   l.bind.state = kBindPending;
   l.eventValid = false;
   l.controlValid = false;
+  l.cValid = l.unsure = false;  // a new hub remembers nothing of the device's controls
 }
 
 // True when the frame was the hub link's to handle; false lets the session handle it as before.
@@ -73,14 +74,14 @@ bool Session::hubFrame(const Frame& f) {
       lastTxnControl_ = l.controlValid;
       lastTxnSeq_ = l.controlSeq;
       lastTxnId_ = l.controlId;
-      hubAnswer(f);
-      return true;
+      // fall through - an answer like the others
     case kMsgAck:
     case kMsgNak:
     case kMsgResponse: {
+      if (hubCleared(f)) return true;
       bool ours = l.queued && l.queue[l.head].tries && f.seq == l.headSeq && f.id == l.queue[l.head].id;
       if (ours) hubAnswer(f);
-      return ours || f.type == kMsgResponse;  // a late answer to a retry is dropped
+      return ours || f.type == kMsgResponse || f.type == kMsgChunk;  // a late answer to a retry is dropped
     }
     case kMsgEvent:
       if (!linked_) return sendNak(kErrNotLinked), true;
@@ -97,6 +98,17 @@ bool Session::hubFrame(const Frame& f) {
   }
 }
 
+// Any answer to the chunk request sent in place of the head control (hubPoll()): the hub
+// remembers none of the device's controls now, and the control goes out next, with a seq of its own.
+bool Session::hubCleared(const Frame& f) {
+  HubLink& l = hubLink;
+  if (!l.clearing || f.seq != l.headSeq || f.id != 0) return false;
+  l.clearing = false;
+  l.queue[l.head].tries = 0;
+  hubAnswered(kMsgChunk);
+  return true;
+}
+
 // An answer to the head: it leaves the queue, then exactly one of its callbacks runs.
 void Session::hubAnswer(const Frame& f) {
   HubLink& l = hubLink;
@@ -104,6 +116,7 @@ void Session::hubAnswer(const Frame& f) {
   HubLink::Entry e = l.queue[l.head];
   l.head = (uint8_t)((l.head + 1) % HUBWIRE_HUB_QUEUE);
   --l.queued;
+  hubAnswered(e.type);
   uint8_t code = kOk;
   if (f.type == kMsgNak) {
     code = f.len == 1 && f.payload[0] != kOk ? f.payload[0] : (uint8_t)kErrBadLength;
@@ -170,36 +183,29 @@ void Session::hubBind(const Frame& f) {
 
 // Sends the head once the hub has bound this session, retries it, and gives up after
 // HUBWIRE_HUB_TRIES sends; a request that cannot be sent (no link, no bind report: an old hub)
-// gives up as long after it was queued.
+// gives up as long after it was queued. A control never takes a seq the hub may still remember of
+// an earlier one (txn.cpp, hubAnswered()); after a control left unanswered while an earlier one may
+// be remembered, the next control's first tries send a chunk request instead, whose answer ends the
+// hub's memory (hubCleared(), PROTOCOL.md 10.2).
 void Session::hubPoll(uint16_t now) {
   HubLink& l = hubLink;
-  // Events and the device's R, C, J take their seq from one counter: a head event about to be sent
-  // for the first time (later in this update()) takes the next one. It is numbered when it has no
-  // number yet from the counter's last value: the event before it may have been sent and acked
-  // since the last poll (the queue's seq is then the counter's, not one below), and a request
-  // numbered since takes the counter on.
-  if ((int8_t)(events_.seq() - l.counter) > 0) l.counter = events_.seq();  // sent before the link began
-  if (!events_.size() || events_.inFlight()) {
-    l.eventNumbered = false;
-  } else if (!l.eventNumbered || (uint8_t)(events_.seq() + 1) != l.counter) {
-    events_.nextSeqIs(++l.counter);
-    l.eventNumbered = true;
-  }
   while (l.queued) {
     HubLink::Entry& e = l.queue[l.head];
     bool canSend = linked_ && l.bound;
     bool giveUp;
     if (!e.tries) {
-      if (canSend) {
-        l.headSeq = ++l.counter;
-        l.eventNumbered = false;  // an event not sent yet takes a seq after this one
-      }
       giveUp = !canSend && (uint16_t)(now - e.at) >= kHubGiveUpMs;
     } else {
       if ((uint16_t)(now - e.at) < HUBWIRE_HUB_RETRY_MS) return;
       giveUp = e.tries >= HUBWIRE_HUB_TRIES;
     }
     if (giveUp) {
+      if (e.type == kMsgControl && e.tries && !l.clearing) {  // the hub may have applied it
+        l.unsure = l.cValid;
+        l.cValid = true;
+        l.cSeq = l.headSeq;
+      }
+      l.clearing = l.inFlight = false;
       HubFail fail = e.fail;
       l.head = (uint8_t)((l.head + 1) % HUBWIRE_HUB_QUEUE);
       --l.queued;
@@ -207,14 +213,34 @@ void Session::hubPoll(uint16_t now) {
       continue;
     }
     if (!canSend && !e.tries) return;
+    if (!e.tries) {
+      l.clearing = e.type == kMsgControl && l.unsure;
+      l.headSeq = takeTxn(e.type == kMsgControl && l.cValid ? l.cSeq : l.headSeq);
+    }
     ++e.tries;  // while the link is down, a try passes unsent: the request still ends
     e.at = now;
     if (canSend) {
-      memcpy(tx().payload(), e.data, e.len);
-      send(e.type, l.headSeq, e.id, e.len);
+      l.inFlight = true;
+      uint8_t* p = tx().payload();
+      if (l.clearing) {
+        p[0] = p[1] = p[2] = 0;  // offset 0, want 0: an empty chunk, whatever the hub describes
+        send(kMsgChunk, l.headSeq, 0, kChunkRequestSize);
+      } else {
+        memcpy(p, e.data, e.len);
+        send(e.type, l.headSeq, e.id, e.len);
+      }
     }
     return;
   }
+}
+
+// The hub answered the head: what it remembers of the device's controls is now that control, or
+// nothing (any other request ends that memory).
+void Session::hubAnswered(uint8_t type) {
+  HubLink& l = hubLink;
+  l.cValid = type == kMsgControl;
+  l.cSeq = l.headSeq;
+  l.unsure = l.inFlight = false;
 }
 
 // ---- the sketch's requests ----

@@ -70,9 +70,14 @@ class HubLink {
 
   Entry queue[HUBWIRE_HUB_QUEUE];
   uint8_t head, queued;
-  uint8_t counter;  // the device's transaction counter: its events and its R, C, J
-  bool eventNumbered;  // the head event, not sent yet, has its seq from counter
-  uint8_t headSeq;
+  uint8_t counter;  // the device's transaction counter: its events, updates and R, C, J (txn.cpp)
+  uint8_t headSeq;  // the seq of the head, or of the chunk request sent in its place, once sent
+  bool inFlight;    // ... and it waits for its answer
+  // What the hub may remember of the device's controls (PROTOCOL.md 10.2): cSeq, the last control
+  // answered or left unanswered, when cValid; unsure: an earlier one may be remembered instead, so
+  // the next control sends a chunk request first (clearing), whose answer ends the hub's memory.
+  bool cValid, unsure, clearing;
+  uint8_t cSeq;
   bool hubKnown;    // hubNonce: the hub session the link last saw (the session's, copied)
   uint32_t hubNonce;
   bool bound;       // the bind report of this hub session has arrived

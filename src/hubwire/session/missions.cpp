@@ -17,12 +17,6 @@ bool missionDispatch(Session& s, uint8_t what) {
   return what == kMissionFrame ? s.missionFrame(s.received()) : s.missionAck(s.received());
 }
 
-// The hub link when this session has one (hub channels): it keeps the transaction counter then.
-HubLink* Session::missionHubLink() {
-  HubLink* l = HubwireHub<true, void>::link;
-  return l && l->owner == this ? l : nullptr;
-}
-
 bool missionReport(MissionState& m, uint8_t kind, const void* value, uint8_t len, uint8_t* slot) {
   if (!(m.flags_ & MissionState::kRunning)) return false;
   if (len) memcpy(slot, value, len);
@@ -116,29 +110,12 @@ uint8_t Session::missionStart(const Frame& f, const ChannelInfo& ch, MissionStat
 
 // ---- the M updates ----
 
-// The next seq of the device's one transaction counter, which numbers its events, its requests to
-// the hub (hub_link.cpp keeps the counter when the sketch has hub channels) and its updates.
-uint8_t Session::missionTake() {
-  if (HubLink* hub = missionHubLink()) {
-    if ((int8_t)(events_.seq() - hub->counter) > 0) hub->counter = events_.seq();
-    // The head event, if the link numbered it already, is numbered again after this seq (hubPoll):
-    // it may be sent and acked before the link's next look, which must not take the counter for it.
-    hub->eventNumbered = false;
-    return ++hub->counter;
-  }
-  return ++missionLink.counter;
-}
+// The next update's seq: never the previous update's, which the hub remembers (txn.cpp).
+uint8_t Session::missionTake() { return takeTxn(missionLink.seq); }
 
-// Each update(): the counter kept ahead of the events' seq, then the update in flight retried, or
-// the next one sent.
+// Each update(): the update in flight retried, or the next one sent.
 void Session::missionPoll(uint16_t now) {
   MissionLink& l = missionLink;
-  bool own = uses(kUsesEvents) && !missionHubLink();  // the counter is kept here
-  if (own) {
-    // Events number themselves (++seq when a new head is sent): an event sent, even acked, since
-    // the last poll moves the counter on, and the next event is told to follow the counter.
-    if ((int8_t)(events_.seq() - l.counter) > 0) l.counter = events_.seq();
-  }
   if (!linked_) {
     l.linked = false;
   } else if (l.id) {
@@ -180,9 +157,6 @@ void Session::missionPoll(uint16_t now) {
     }
     if (!l.id) l.pending = false;
   }
-  // The next event not yet sent takes a seq after the counter's.
-  if (own && !events_.inFlight() && (int8_t)(l.counter - events_.seq()) > 0)
-    events_.nextSeqIs((uint8_t)(l.counter + 1));
 }
 
 void Session::missionSend() {

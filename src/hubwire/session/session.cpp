@@ -223,6 +223,9 @@ bool Session::emitRaw(uint8_t id, const void* value, uint8_t size) {
 }
 
 void Session::sendEvent(uint16_t now) {
+  // A new head's seq: from the one counter where missions or hub channels share it (txn.cpp),
+  // never the previous event's; else the queue's own ++seq.
+  if (sharedCounter() && !events_.inFlight()) events_.nextSeqIs(takeTxn(events_.seq()));
   const EventQueue::Entry& e = events_.send(now);
   memcpy(tx().payload(), e.data, sizeof(e.data));  // the whole slot, a fixed size: copied inline
   send(kMsgEvent, events_.seq(), e.id, e.len);

@@ -246,7 +246,6 @@ class Session : private SessionState {
  private:
   // Missions (missions.cpp), reached only when the sketch declares one.
   friend bool missionDispatch(Session& s, uint8_t what);
-  HubLink* missionHubLink();
   bool missionFrame(const Frame& f);
   bool missionAck(const Frame& f);
   void missionPoll(uint16_t now);
@@ -267,6 +266,11 @@ class Session : private SessionState {
   void hubEvent(const Frame& f);
   void hubBind(const Frame& f);
   void hubPoll(uint16_t now);
+  void hubAnswered(uint8_t type);
+  bool hubCleared(const Frame& f);
+
+  // The device's one transaction counter (txn.cpp), where hub channels or missions share it.
+  uint8_t takeTxn(uint8_t avoid);
 
   // Values too long for one frame (fragments.cpp), reached only where the sketch declares one.
   friend void fragmentReceived(Session& s, const Frame& f);
