@@ -1,6 +1,8 @@
 // Large values in fragments (docs/PROTOCOL.md 12) on the device: a 1 KB struct written, read and
 // streamed; reassembly and every way it is abandoned; capacity; the duplicate memory for a retried
 // large control; fragments sized to what the hub accepts; large Lists written and passed.
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "large_sketch.h"
@@ -63,7 +65,7 @@ TEST_F(Large, ARetriedLargeControlIsAnsweredFromMemoryNotAppliedTwice) {
   EXPECT_EQ(kiloChanges, 2);
 }
 
-TEST_F(Large, OutOfOrderRepeatedOrMissingFragmentsAbandonTheValue) {
+TEST_F(Large, OutOfOrderRepeatedOrMissingFragmentsNeverCompleteTheValue) {
   link();
   Bytes value = pattern(1024, 4);
   auto f = split('C', value);
@@ -72,25 +74,62 @@ TEST_F(Large, OutOfOrderRepeatedOrMissingFragmentsAbandonTheValue) {
     std::vector<Bytes> frames;
     int dropped;
   } cases[] = {
-      {"swapped", {f[0], f[2], f[1]}, 2},
-      {"repeated", {f[0], f[1], f[1], f[2]}, 2},
+      {"swapped", {f[0], f[2], f[1]}, 1},  // the one past the gap; the next one in order is kept
+      {"repeated", {f[0], f[1], f[1], f[2]}, 0},  // a fragment it has is skipped
       {"missing last", std::vector<Bytes>(f.begin(), f.end() - 1), 0},
       {"missing first", std::vector<Bytes>(f.begin() + 1, f.end()), (int)f.size() - 1},
   };
+  uint8_t seq = 0x50;
   for (auto& c : cases) {
     SCOPED_TRACE(c.what);
     uint16_t before = dropped();
-    auto got = send(0x50, kKilo, c.frames);
+    auto got = send(seq++, kKilo, c.frames);  // each case a message of its own
     EXPECT_TRUE(got.empty());
     EXPECT_EQ(dropped() - before, c.dropped);
     EXPECT_EQ(kiloChanges, 0);
     EXPECT_EQ(kilo.words[0], 0u);
   }
-  // the hub's retry of the whole value goes through; the missing-last one was abandoned by it
-  auto got = send(0x50, kKilo, f);
+  // the hub's retry of the whole value goes through
+  auto got = send(0x60, kKilo, f);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].type, 0x07);
   EXPECT_EQ(bytesOf(&kilo, sizeof(kilo)), value);
+}
+
+// Each try of a large control (same seq, same bytes: PROTOCOL.md 4.1) adds to what the tries before
+// it brought, so a long value gets through a lossy line in tries in proportion to its length.
+TEST_F(Large, ATryCarriesOnWhereTheOneBeforeLeftOff) {
+  link();
+  Bytes value = pattern(1024, 8);
+  auto f = split('C', value);
+  auto without = [&](std::initializer_list<size_t> lost) {
+    std::vector<Bytes> out;
+    for (size_t i = 0; i < f.size(); ++i)
+      if (std::find(lost.begin(), lost.end(), i) == lost.end()) out.push_back(f[i]);
+    return out;
+  };
+  EXPECT_TRUE(send(0x61, kKilo, without({10, 30})).empty());
+  EXPECT_TRUE(send(0x61, kKilo, without({5, 25})).empty());  // 5 it has; 10 .. 24 it takes now
+  EXPECT_EQ(kiloChanges, 0);
+  auto got = send(0x61, kKilo, without({3, 20}));  // only what it had already is lost this time
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, 0x07);
+  EXPECT_EQ(bytesOf(&kilo, sizeof(kilo)), value);
+  EXPECT_EQ(kiloChanges, 1);
+}
+
+// A control between two tries ends the one in progress: a later message that happens to take the
+// same seq, id and length never completes it with bytes of its own.
+TEST_F(Large, AnotherControlEndsAHalfReassembledOne) {
+  link();
+  auto first = split('C', pattern(1024, 9));
+  auto other = split('C', pattern(1024, 10));
+  EXPECT_TRUE(send(0x62, kKilo, std::vector<Bytes>(first.begin(), first.begin() + 10)).empty());
+  sendFrame(stream, 'C', 0x63, kSmall, Bytes{1, 2, 3, 4});
+  ASSERT_EQ(run().size(), 1u);
+  EXPECT_TRUE(send(0x62, kKilo, std::vector<Bytes>(other.begin() + 10, other.end())).empty());
+  EXPECT_EQ(kiloChanges, 0);
+  EXPECT_EQ(kilo.words[0], 0u);
 }
 
 TEST_F(Large, AFragmentOfAnotherMessageAbandonsTheOneInProgress) {

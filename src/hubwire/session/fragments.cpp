@@ -27,7 +27,16 @@ void fragmentReceived(Session& s, const Frame& f) {
   const uint8_t* p = f.payload;
   uint8_t type = p[0];
   uint16_t offset = loadU16(p + 1), total = loadU16(p + 3), n = (uint16_t)(f.len - kFragmentHeader);
-  if (offset == 0) {  // a new message: whatever was in progress is abandoned
+  if (r && r->total && type == r->type && f.seq == r->seq && f.id == r->id && total == r->total) {
+    // The message in progress, or a retry of it: a retry carries the same bytes (4.1, rule 1), so
+    // what is here stays, a fragment it has is skipped and one past a gap dropped. Each try then
+    // adds to the last, and a long value needs tries in proportion to its length, not to the
+    // chance of a whole try getting through.
+    if (offset != r->next || total - offset < n) {
+      if (offset > r->next) ++s.rx_.counters.dropped;
+      return;
+    }
+  } else if (offset == 0) {  // a new message: whatever was in progress is abandoned
     if (r) r->total = 0;
     if (total > capacity && total >= n) {
       if (answered(type)) return s.sendNak(kErrBadLength);  // seq and id are the carried message's
@@ -43,9 +52,9 @@ void fragmentReceived(Session& s, const Frame& f) {
     r->id = f.id;
     r->total = total;
     r->next = 0;
-  } else if (!r || r->total == 0 || type != r->type || f.seq != r->seq || f.id != r->id || total != r->total ||
-             offset != r->next || total - offset < n) {
-    // Lost, repeated, reordered or foreign: the value is abandoned, never delivered torn.
+  } else {
+    // Another message's fragment past its start (the start was lost): the one in progress is
+    // abandoned, never completed with another message's bytes.
     if (r) r->total = 0;
     ++s.rx_.counters.dropped;
     return;

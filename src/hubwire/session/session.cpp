@@ -119,6 +119,9 @@ void Session::handle(const Frame& f) {
   }
   if (!linked_) return sendNak(kErrNotLinked);
   bool control = f.type == kMsgControl;
+  // Another control of the hub (one at a time, 4.4): a control half reassembled will not be
+  // retried, so no later message may complete it (fragments.cpp keeps a partial for its retry).
+  if (HubwireLarge<true, void>::state && control) HubwireLarge<true, void>::state->total = 0;
   if (control && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
     // a retried control: answer again, do not apply twice (without returns the answer kept is
     // one byte, an ACK's or a NAK's code)
