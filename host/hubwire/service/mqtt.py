@@ -127,7 +127,7 @@ class Bridge:
             await client.publish(status, ONLINE, qos=1, retain=True)
             for f in self.topics.command_filters():
                 await client.subscribe(f, qos=1)
-            await client.subscribe(self.topics.descriptor("+"), qos=1)
+            await client.subscribe(self.topics.descriptor_filter(), qos=1)
             if self.config.discovery_prefix:
                 await client.subscribe(f"{self.config.discovery_prefix}/status", qos=1)
             self.outbox.all_dirty()

@@ -158,6 +158,10 @@ class Topics:
     def errors(self, key: str) -> str:
         return self.board(key, "error")
 
+    def descriptor_filter(self) -> str:
+        """What the bridge subscribes to for every board's descriptor (its own and other services')."""
+        return f"{self.prefix}/+/descriptor"
+
     def command_filters(self) -> Tuple[str, ...]:
         """What the bridge subscribes to for commands."""
         return tuple(f"{self.prefix}/+/{op}/+" for op in OPS) + (f"{self.prefix}/+/rpc",)
