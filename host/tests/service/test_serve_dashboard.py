@@ -40,12 +40,13 @@ def test_the_dashboard_shows_every_board_the_service_owns(boards_dir: str, tmp_p
         serve.wait_state("rover--aa01", "ready")
         b = emulators("b", "--board-id", "bb02")
         serve.wait_state("rover--bb02", "ready")
-        wait_for(lambda: "dashboard at http://localhost:%d/" % http in serve.log_text(), what="the dashboard")
+        url = wait_for(lambda: re.search(r"dashboard at (http://localhost:%d/\?token=\S+)" % http, serve.log_text()),
+                       what="the dashboard")[1]
         with playwright_api.sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
             page = browser.new_page(viewport={"width": 1400, "height": 1000})
             page.set_default_timeout(WAIT_MS)
-            page.goto(f"http://localhost:{http}/")
+            page.goto(url)
             wait_text(page, sel("state", "rover--aa01"), "^ready$")
             wait_text(page, sel("state", "rover--bb02"), "^ready$")
             # another client of the service writes; the page shows the board's value
