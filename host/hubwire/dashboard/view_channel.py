@@ -13,6 +13,7 @@ from nicegui import ui
 
 from ..descriptor import Channel
 from ..errors import HubwireError
+from ..service.topics import safe_id
 from .attrs import tag
 from .feed import READ_MAX_HZ, BoardFeed, outcome_text
 from .model import RATES, ChannelRecord, decimate, fmt_value, is_integer, plottable, to_csv, widget_for
@@ -126,7 +127,8 @@ class PlotView:
     def _csv(self) -> None:
         d = self._data  # what is plotted now (frozen while paused)
         text = to_csv(d["cols"], d["times"], d["rows"])
-        ui.download.content(text.encode(), f"{self.feed.key}-{self.rec.channel.name}.csv", "text/csv")
+        # a file name: only [A-Za-z0-9_-] of the key and channel
+        ui.download.content(text.encode(), f"{safe_id(self.feed.key)}-{safe_id(self.rec.channel.name)}.csv", "text/csv")
 
 
 class InputView:

@@ -93,3 +93,47 @@ def test_board_ids_are_escaped_like_names() -> None:
     for key in keys.values():
         assert_clean_level(Topics().status(key).split("/")[1])
         assert doc.TOPIC.match(ha.config_topic(Topics(), "sensor", key, "speed"))
+
+
+def test_topics_of_a_key_the_board_no_longer_has_are_cleared(broker, emulators, cache_dir: str) -> None:  # type: ignore[no-untyped-def]
+    """A board that had the key ``rover-aa01`` (before keys were derived from identity alone) is
+    served as ``rover--aa01``: what the broker retains under the old key (descriptor, link state,
+    channel states, Home Assistant configs) is cleared, so Home Assistant drops the ghost device;
+    a key of a board that is merely unplugged is left alone."""
+    import asyncio
+
+    import aiomqtt
+
+    from .helpers import StandInFleet, running_bridge, watcher
+
+    emus = emulators(1)
+    old = "rover-aa01"
+    rover = json.loads(desc("rover", ["speed"]))
+    old_topics = {f"hubwire/{old}/descriptor": json.dumps({"key": old, "name": "rover", "board_id": "aa01",
+                                                           "service": "test", "descriptor": rover}),
+                  f"hubwire/{old}/status": "online", f"hubwire/{old}/state/speed": "0.5",
+                  f"homeassistant/sensor/{old}/speed/config": "{}"}
+    # another board of this service, unplugged now, keeps its topics
+    kept = {"hubwire/arm/descriptor": json.dumps({"key": "arm", "name": "arm", "board_id": None,
+                                                  "service": "test", "descriptor": rover}),
+            "hubwire/arm/state/speed": "0.25"}
+
+    async def main() -> None:
+        async with aiomqtt.Client("127.0.0.1", broker.port) as c:
+            for t, p in {**old_topics, **kept}.items():
+                await c.publish(t, p, qos=1, retain=True)
+        fleet = StandInFleet(cache_dir)
+        b = await fleet.plug("rover--aa01", emus[0].link)
+        b.board_id = "aa01"
+        async with running_bridge(fleet, broker.port):
+            async with watcher(broker.port, "hubwire/rover--aa01/descriptor") as w:
+                await w.wait_for(lambda: "hubwire/rover--aa01/descriptor" in w.last, 15, "the new key")
+            await asyncio.sleep(1.0)
+            async with watcher(broker.port, "hubwire/#", "homeassistant/#") as w:
+                await w.wait_for(lambda: all(t in w.last for t in kept), 10, "the retained store")
+                await asyncio.sleep(1.0)
+                left = {t for t in old_topics if w.last.get(t)}
+                assert not left, left
+                assert {t: w.last[t].decode() for t in kept} == kept
+        await fleet.close()
+    asyncio.run(asyncio.wait_for(main(), 60))
