@@ -8,7 +8,7 @@ two id-less boards share a name: after a replug they may swap keys).
 
 Keys clients use (:func:`hubwire.service.topics.board_key`): the name, then ``--<board id>`` when the
 board has one, each part escaped where it is not plain (``rover``, ``rover--A1B2``,
-``a_b-x1c7f0a2e``); boards claiming the same name and id get ``---2``, ``---3``... The key depends on
+``a_b-xc14cddc0``); boards claiming the same name and id get ``---2``, ``---3``... The key depends on
 the board only, so restarts and replugs never move it. A name only one board has, ``name-<board id>``
 and the current port path resolve too (:meth:`Fleet.resolve`).
 

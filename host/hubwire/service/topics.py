@@ -42,7 +42,7 @@ def level(text: str) -> str:
 
     A plain text (``[A-Za-z0-9_]`` words joined by single ``-``, at most 32 characters) stays as it
     is; any other becomes its slug plus ``-x`` and 8 hex digits of its SHA-256 (``a/b`` ->
-    ``a_b-x1c7f0a2e``). Plain texts never end like that, so a level never stands for two texts
+    ``a_b-xc14cddc0``). Plain texts never end like that, so a level never stands for two texts
     (short of a hash collision between two non-plain ones). The result never contains ``--``, never
     starts or ends with ``-``, and has no MQTT syntax (``+ # / $`` or NUL).
     """
