@@ -5,7 +5,7 @@ device paths are the emulators' ptys."""
 from __future__ import annotations
 
 import asyncio
-from typing import Any, Callable, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from conftest import Emulator
 from hubwire.service.fleet import Board, Changes, Fleet, UnknownBoard
@@ -140,3 +140,29 @@ def test_board_ids_the_devices_report_keep_their_keys_when_replugged_swapped(
         await changes.aclose()
         await fleet.close()
     asyncio.run(main())
+
+
+def test_a_restart_finding_the_boards_in_another_order_gives_each_its_key(
+        emulators: Callable[..., Emulator], boards_dir: str, tmp_path: Any) -> None:
+    """Keys come from the board (name and id), not from which board a scan finds first: a service
+    restarted with the boards found the other way round gives each board the key it had."""
+    async def run(first: str, second: str) -> Dict[Optional[str], str]:
+        fleet = Fleet(globs=[boards_dir + "/*"], usb=False, poll_interval=0.1, udev=False,
+                      cache_dir=str(tmp_path / "cache"))
+        changes = fleet.changes()
+        seen: List[Board] = []
+        await fleet.start()
+        emus = [emulators(f"{first}-0", "--board-id", first)]
+        await until(changes, seen, lambda b: b.board_id == first and b.state == "ready")
+        emus.append(emulators(f"{second}-0", "--board-id", second))
+        await until(changes, seen, lambda b: b.board_id == second and b.state == "ready")
+        keys = {x.board_id: x.key for x in fleet.boards()}
+        await changes.aclose()
+        await fleet.close()
+        for e in emus:
+            e.stop()
+        return keys
+
+    before = asyncio.run(run("aa01", "bb02"))
+    after = asyncio.run(run("bb02", "aa01"))
+    assert before == after == {"aa01": "rover--aa01", "bb02": "rover--bb02"}
