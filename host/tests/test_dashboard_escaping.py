@@ -58,3 +58,20 @@ def test_a_crafted_board_is_shown_as_text_and_runs_nothing(page: Any) -> None:
     body = page.locator("body").inner_text()
     assert PWN_HTML in body  # the firmware and unit, as text
     assert page.locator("[data-hw-board]").count() == 1
+
+
+def test_no_element_props_classes_or_style_are_built_from_text() -> None:
+    """props("...") parses its string, so one built with an f-string lets a quote in a board's string
+    add props; attributes carrying data go through dashboard/attrs.py (tag) instead."""
+    import re
+    from pathlib import Path
+
+    import hubwire.dashboard as pkg
+
+    pattern = re.compile(r"\.(props|classes|style)\(\s*(f['\"]|[^)'\"]*\{)")
+    found = []
+    for path in sorted(Path(pkg.__file__).parent.glob("*.py")):
+        for n, line in enumerate(path.read_text().splitlines(), 1):
+            if pattern.search(line):
+                found.append(f"{path.name}:{n}: {line.strip()}")
+    assert not found, "\n".join(found)
