@@ -83,7 +83,7 @@ test-python: emulator simuno uno-firmware
 demo: setup simuno uno-firmware
 	bash tools/demo.sh
 
-# The browser dashboard on the same simulated Uno: http://localhost:8080/ until Ctrl-C.
+# The browser dashboard on the same simulated Uno, at the address (with a token) it prints, until Ctrl-C.
 dashboard-demo: setup simuno uno-firmware
 	bash tools/demo.sh --dashboard
 

@@ -10,7 +10,7 @@
 # for the venv) first; `make demo` does all of it.
 #
 # `make dashboard-demo` (`tools/demo.sh --dashboard`): the same simulated Uno shown in the browser
-# dashboard instead (`hubwire dashboard`, http://localhost:8080/) until Ctrl-C.
+# dashboard instead (`hubwire dashboard`, at the address with a token it prints) until Ctrl-C.
 #
 # Environment: HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
 # default), DEMO_BOOT_DELAY_MS (default 1000), DASHBOARD_PORT (default 8080).
@@ -76,8 +76,9 @@ if [ "$MODE" = dashboard ]; then
 ================================================================================
  Hubwire dashboard demo: examples/Rover on a simulated Arduino Uno ($link)
 
- Open http://localhost:$port/ in a browser: live values and plots, sliders for
- the motors, actions, the bumper's events, link health and the descriptor.
+ Open the address printed below (http://localhost:$port/?token=..., the token is
+ made up at each start) in a browser: live values and plots, sliders for the
+ motors, actions, the bumper's events, link health and the descriptor.
  ${DEMO_DURATION:+It stops by itself after $DEMO_DURATION s; }Ctrl-C stops it.
 
  With real boards:  .venv/bin/hubwire dashboard /dev/ttyACM0 [/dev/ttyACM1 ...]

@@ -287,14 +287,14 @@ def test_with_a_token_the_page_needs_it(tmp_path: Any, browser: Any) -> None:
     board.start()
     dash = Dashboard((board.link,), "--token", "s3cret")
     try:
-        assert dash.url.endswith("/?token=s3cret")
+        assert "s3cret" not in dash.url  # a token the user gave is never printed
         bare = dash.url.split("?")[0]
         ctx = browser.new_context()  # cookies of its own
         pg = ctx.new_page()
         pg.set_default_timeout(WAIT_MS)
         assert pg.goto(bare).status == 401
         assert pg.goto(bare + "?token=s3cre").status == 401
-        assert pg.goto(dash.url).status == 200
+        assert pg.goto(bare + "?token=s3cret").status == 200
         wait_text(pg, sel("state", "actions"), "^ready$")
         assert pg.goto(bare).status == 200  # the token is remembered for this site
         wait_text(pg, sel("state", "actions"), "^ready$")

@@ -10,7 +10,8 @@ import pytest
 
 from hubwire.descriptor import parse_descriptor
 from hubwire.dashboard import model
-from hubwire.dashboard.server import TOKEN_COOKIE, TokenGate, is_loopback, resolve_token
+from hubwire.dashboard.auth import TOKEN_ENV, load_token, served_names
+from hubwire.dashboard.server import TOKEN_COOKIE, TokenGate, is_loopback
 
 DESC = {"p": 1, "n": "bot", "ch": [
     {"id": 1, "n": "speed", "a": "rws", "t": "f32", "min": -1, "max": 1, "u": "m/s"},
@@ -82,11 +83,18 @@ def test_loopback_addresses(host: str, loop: bool) -> None:
     assert is_loopback(host) is loop
 
 
-def test_a_network_address_gets_a_token_unless_one_is_given() -> None:
-    assert resolve_token("127.0.0.1", None) is None
-    made = resolve_token("0.0.0.0", None)
-    assert made and len(made) >= 16 and made != resolve_token("0.0.0.0", None)
-    assert resolve_token("0.0.0.0", "mine") == "mine"
+def test_a_token_is_made_unless_one_is_given_also_on_loopback(tmp_path: Any, monkeypatch: Any) -> None:
+    monkeypatch.delenv(TOKEN_ENV, raising=False)
+    made, fresh = load_token()
+    assert fresh and len(made) >= 16 and made != load_token()[0]
+    assert load_token("mine") == ("mine", False)
+    monkeypatch.setenv(TOKEN_ENV, "from-env")
+    assert load_token() == ("from-env", False) and load_token("mine") == ("mine", False)
+    f = tmp_path / "t"
+    f.write_text("from-file\nsecond line\n")
+    assert load_token("mine", str(f)) == ("from-file", False)
+    with pytest.raises(ValueError):
+        load_token("two words")
 
 
 def _call(gate: TokenGate, kind: str, query: bytes = b"", cookie: str = "") -> Tuple[List[Any], bool]:
@@ -104,13 +112,13 @@ def _call(gate: TokenGate, kind: str, query: bytes = b"", cookie: str = "") -> T
         sent.append(msg)
 
     gate.app = app
-    headers = [(b"cookie", cookie.encode())] if cookie else []
+    headers = [(b"host", b"localhost:8080")] + ([(b"cookie", cookie.encode())] if cookie else [])
     asyncio.run(gate({"type": kind, "query_string": query, "headers": headers}, receive, send))
     return sent, bool(reached)
 
 
 def test_the_token_gate_lets_in_only_who_gives_the_token() -> None:
-    gate = TokenGate(None, "s3cret")
+    gate = TokenGate(None, "s3cret", served_names("127.0.0.1"))
     sent, reached = _call(gate, "http")
     assert not reached and sent[0]["status"] == 401
     sent, reached = _call(gate, "http", b"token=wrong")

@@ -6,11 +6,12 @@ import argparse
 import asyncio
 import contextlib
 import signal
-import socket
 import sys
 from typing import Any, Dict, List, Tuple
 
-from .server import DEFAULT_PORT, resolve_token, run_dashboard
+from . import add_access_options, address_line
+from .auth import load_token
+from .server import DEFAULT_PORT, run_dashboard
 
 __all__ = ["add_parser", "cmd_dashboard", "board_ports", "parse_rates"]
 
@@ -20,7 +21,7 @@ def add_parser(sub: Any, parents: List[argparse.ArgumentParser]) -> None:
         "dashboard", parents=parents, help="every board live in the browser (pip install 'hubwire[dashboard]')",
         description="Serve a web page showing each board: live values and plots, inputs for writable "
                     "channels, action buttons, events, link health and the descriptor. Listens on "
-                    "this machine only unless --host says otherwise; then a token is required.")
+                    "this machine only unless --host says otherwise; a token is always required.")
     s.add_argument("ports", nargs="*", metavar="PORT",
                    help="serial ports or pyserial URLs of the boards (default: every port with a known board "
                         "USB id); a port that is absent yet is tried again every second")
@@ -28,9 +29,7 @@ def add_parser(sub: Any, parents: List[argparse.ArgumentParser]) -> None:
                    help=f"web server port (default {DEFAULT_PORT})")
     s.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only; 0.0.0.0: the network)")
-    s.add_argument("--token", default=None,
-                   help="secret the browser must give (?token=...); made up and printed when --host is not "
-                        "loopback and none is given")
+    add_access_options(s)
     s.add_argument("--rate", action="append", default=[], metavar="[CHANNEL=]HZ",
                    help="samples per second asked at first of each streamable channel (default 10), or of "
                         "one channel (imu=100; rover.imu=100 for one board's); may be repeated")
@@ -76,7 +75,11 @@ def cmd_dashboard(args: argparse.Namespace) -> int:
     except ValueError as e:
         sys.stderr.write(f"hubwire: --rate: {e}\n")
         return 2
-    token = resolve_token(args.host, args.token)
+    try:
+        token = load_token(args.token, args.token_file)
+    except (OSError, ValueError) as e:
+        sys.stderr.write(f"hubwire: dashboard token: {e}\n")
+        return 2
     try:
         return asyncio.run(_main(args, ports, token))
     except KeyboardInterrupt:
@@ -101,21 +104,17 @@ async def _main(args: argparse.Namespace, ports: List[str], token: Any) -> int:
         with contextlib.suppress(NotImplementedError):  # no add_signal_handler on Windows
             loop.add_signal_handler(sig, stop, sig)
 
-    # the address to open: this machine's name when listening on every address
-    host = {"127.0.0.1": "localhost", "::1": "localhost", "0.0.0.0": socket.gethostname(),
-            "::": socket.gethostname()}.get(args.host, args.host)
-
     def started() -> None:
-        url = f"http://{host}:{args.http}/" + (f"?token={token}" if token else "")
-        print(f"hubwire dashboard: {url}  ({', '.join(ports)}; Ctrl-C to stop)", flush=True)
+        print(f"hubwire dashboard: {address_line(args.host, args.http, *token)}  ({', '.join(ports)}; "
+              "Ctrl-C to stop)", flush=True)
 
     kwargs = {"timeout": args.timeout, "baudrate": args.baud}
     if args.no_cache:
         kwargs["cache_dir"] = False
     try:
         async with DeviceFleet(ports, **kwargs) as fleet:
-            await run_dashboard(fleet, args.host, args.http, token, stream_hz=args.stream_hz, rates=args.rates,
-                                started=started)
+            await run_dashboard(fleet, args.host, args.http, token[0], stream_hz=args.stream_hz, rates=args.rates,
+                                started=started, allow_hosts=args.allow_host)
     except asyncio.CancelledError:
         if not got:
             raise

@@ -16,6 +16,7 @@ from typing import Any, AsyncIterator, Dict, List, Optional, Protocol, Set
 
 from .. import aio
 from ..errors import HubwireError
+from ..service.topics import board_key
 
 __all__ = ["BoardLike", "FleetLike", "Board", "DeviceFleet", "board_id_of"]
 
@@ -147,10 +148,11 @@ class DeviceFleet:
             q.put_nowait(b)
 
     def _key_for(self, name: str, board_id: Optional[str], port: str) -> str:
-        taken = {b.key for b in self._boards.values()}
-        if name not in taken and not any(b.name == name for b in self._boards.values()):
-            return name
-        return f"{name}-{board_id or os.path.basename(port)}"
+        # the service's rule (docs/SERVICE.md): from the board's identity, never the order found
+        n = 1
+        while board_key(name, board_id, n) in self._boards:
+            n += 1
+        return board_key(name, board_id, n)
 
     async def _keep(self, port: str) -> None:
         """Open ``port`` (retrying while it is absent), then follow its state until cancelled."""

@@ -8,30 +8,22 @@ import asyncio
 import contextlib
 import ipaddress
 import logging
-import secrets
 import socket
-from http.cookies import SimpleCookie
-from typing import Any, Awaitable, Callable, Dict, Iterator, Mapping, MutableMapping, Optional, Set
-from urllib.parse import parse_qs
+from typing import Any, Callable, Dict, Iterable, Iterator, Mapping, Optional, Set
 
+from .auth import TOKEN_COOKIE, Gate, TokenGate, load_token, served_names
 from .feed import Feeds
 from .fleet import FleetLike
 
-__all__ = ["run_dashboard", "DEFAULT_PORT", "is_loopback", "resolve_token", "TOKEN_COOKIE"]
+__all__ = ["run_dashboard", "DEFAULT_PORT", "is_loopback", "load_token", "TOKEN_COOKIE", "Gate", "TokenGate"]
 
 log = logging.getLogger("hubwire.dashboard")
 
 DEFAULT_PORT = 8080
-TOKEN_COOKIE = "hubwire_token"
 #: how often values, health and events are pushed to a page, s
 VALUE_REFRESH = 0.1
 #: how often plots are redrawn, s
 PLOT_REFRESH = 0.5
-
-Scope = MutableMapping[str, Any]
-Receive = Callable[[], Awaitable[MutableMapping[str, Any]]]
-Send = Callable[[MutableMapping[str, Any]], Awaitable[None]]
-
 
 def is_loopback(host: str) -> bool:
     """True when ``host`` is reachable from this machine only (127.x, ::1, localhost)."""
@@ -44,58 +36,6 @@ def is_loopback(host: str) -> bool:
             return all(ipaddress.ip_address(a[4][0]).is_loopback for a in socket.getaddrinfo(host, None))
         except (OSError, ValueError):
             return False
-
-
-def resolve_token(host: str, token: Optional[str]) -> Optional[str]:
-    """The token to require: ``token`` if given; a new random one when ``host`` is not loopback
-    (the page must not be open to the network without one); else None."""
-    if token:
-        return token
-    return None if is_loopback(host) else secrets.token_urlsafe(16)
-
-
-class TokenGate:
-    """ASGI middleware: every request (pages, assets, the websocket) needs the token, given once as
-    ``?token=...`` (then kept in a cookie for this site) or as the cookie itself."""
-
-    def __init__(self, app: Any, token: str) -> None:
-        self.app = app
-        self.token = token
-
-    def _ok(self, scope: Scope) -> bool:
-        q = parse_qs(scope.get("query_string", b"").decode("latin-1")).get("token", [])
-        if any(secrets.compare_digest(t, self.token) for t in q):
-            return True
-        for name, value in scope.get("headers", []):
-            if name == b"cookie":
-                c: SimpleCookie = SimpleCookie()
-                with contextlib.suppress(Exception):
-                    c.load(value.decode("latin-1"))
-                if TOKEN_COOKIE in c and secrets.compare_digest(c[TOKEN_COOKIE].value, self.token):
-                    return True
-        return False
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] not in ("http", "websocket") or self._ok(scope):
-            if scope["type"] == "http" and b"token=" in scope.get("query_string", b""):
-                send = self._with_cookie(send)
-            await self.app(scope, receive, send)
-            return
-        if scope["type"] == "websocket":
-            await send({"type": "websocket.close", "code": 1008})
-            return
-        body = b"hubwire dashboard: open the address printed at start (with ?token=...)\n"
-        await send({"type": "http.response.start", "status": 401,
-                    "headers": [(b"content-type", b"text/plain"), (b"content-length", str(len(body)).encode())]})
-        await send({"type": "http.response.body", "body": body})
-
-    def _with_cookie(self, send: Send) -> Send:
-        async def wrapped(msg: MutableMapping[str, Any]) -> None:
-            if msg["type"] == "http.response.start":
-                cookie = f"{TOKEN_COOKIE}={self.token}; Path=/; HttpOnly; SameSite=Strict"
-                msg["headers"] = list(msg.get("headers", [])) + [(b"set-cookie", cookie.encode())]
-            await send(msg)
-        return wrapped
 
 
 # Channels off screen are not redrawn: the page tells which channel cards are on screen (or nearly).
@@ -200,17 +140,19 @@ class _Server:
 async def run_dashboard(fleet: FleetLike, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
                         token: Optional[str] = None, *, stream_hz: float = 10.0,
                         rates: Optional[Mapping[str, float]] = None,
-                        started: Optional[Callable[[], None]] = None) -> None:
+                        started: Optional[Callable[[], None]] = None, allow_hosts: Iterable[str] = ()) -> None:
     """Serve the dashboard of ``fleet``'s boards at ``http://host:port/`` until cancelled.
 
-    ``token``: required from browsers (``http://host:port/?token=TOKEN``) when given; listening on a
-    non-loopback ``host`` without one raises ValueError (:func:`resolve_token` makes one).
+    ``token``: required from browsers (``http://host:port/?token=TOKEN``), on loopback too (any local
+    user reaches a loopback port); None raises ValueError (:func:`load_token` finds or makes one).
+    Requests must name the dashboard in ``Host`` (localhost, 127.0.0.1, [::1], ``host``, or one of
+    ``allow_hosts``) and come from its own origin (:class:`hubwire.dashboard.auth.Gate`).
     ``stream_hz``: the rate streamable channels are subscribed at first (selectable on the page);
     ``rates``: other first rates by channel name (every board) or ``"key.name"`` (one board).
     ``started`` is called once the server listens.
     """
-    if not token and not is_loopback(host):
-        raise ValueError(f"the dashboard listens on {host}, beyond this machine: give it a token")
+    if not token:
+        raise ValueError("the dashboard needs a token, also on loopback: load_token() finds or makes one")
     from fastapi import FastAPI
     from nicegui import ui
 
@@ -220,7 +162,8 @@ async def run_dashboard(fleet: FleetLike, host: str = "127.0.0.1", port: int = D
     app = FastAPI()
     ui.run_with(app, title="Hubwire dashboard", favicon="🔌", show_welcome_message=False,
                 reconnect_timeout=10.0)
-    served: Any = TokenGate(app, token) if token else app
+    wildcard = host in ("", "0.0.0.0", "::")
+    served = Gate(app, token, served_names(host, allow_hosts), any_ip=wildcard)
     try:
         await _Server(served, host, port).serve(started)
     finally:

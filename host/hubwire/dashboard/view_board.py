@@ -10,6 +10,7 @@ from typing import Any, Container, Dict, List, Optional
 from nicegui import ui
 
 from ..descriptor import Channel
+from .attrs import tag
 from .feed import BoardFeed
 from .model import fmt_value
 from .view_channel import PlotView, channel_views
@@ -55,11 +56,11 @@ class BoardView:
         self._events_shown = 0
         self._health_text: Dict[str, str] = {}
         self._ticks = 0
-        self.card = ui.card().classes("w-full").props(f'data-hw-board="{board.key}"')
+        self.card = tag(ui.card().classes("w-full"), board=board.key)
         with self.card:
             with ui.row().classes("items-center gap-4"):
                 ui.label(board.key).classes("text-xl font-bold")
-                self.state = ui.badge(board.state).props(f'data-hw-state="{board.key}"')
+                self.state = tag(ui.badge(board.state), state=board.key)
                 self.where = ui.label("").classes("text-sm text-gray-600")
             self._set_state(board)
             if feed is None:
@@ -73,7 +74,7 @@ class BoardView:
                 for ch in d.channels:
                     if ch.is_event:
                         continue
-                    with ui.card().classes("w-full").props(f'data-hw-channel="{board.key}.{ch.name}"'):
+                    with tag(ui.card().classes("w-full"), channel=f"{board.key}.{ch.name}"):
                         with ui.row().classes("items-baseline gap-2"):
                             ui.label(ch.name).classes("font-bold")
                             ui.label(f"{ch.type_name} ({_access(ch)})"
@@ -92,15 +93,16 @@ class BoardView:
                         with ui.row().classes("gap-4 items-baseline text-sm"):
                             ui.label(ch.name).classes("font-bold")
                             ui.label(f"{_access(ch)}, {ch.type_name}").classes("text-gray-600")
-                            ui.label("bound here" if state == "ok" else f"not bound here: {state}") \
-                                .props(f'data-hw-hub="{board.key}.{ch.name}"')
+                            tag(ui.label("bound here" if state == "ok" else f"not bound here: {state}"),
+                                hub=f"{board.key}.{ch.name}")
             events = [c.name for c in d.channels if c.is_event]
             with ui.expansion(f"events ({', '.join(events) or 'none declared'})", value=True).classes("w-full"):
-                self.events = ui.column().classes("gap-0 font-mono text-sm max-h-64 overflow-auto") \
-                    .props(f'data-hw-events="{board.key}"')
+                self.events = tag(ui.column().classes("gap-0 font-mono text-sm max-h-64 overflow-auto"),
+                                  events=board.key)
             with ui.expansion("descriptor").classes("w-full"):
                 text = json.dumps(json.loads(d.raw), indent=2) if d.raw else "{}"
-                ui.code(text, language="json").classes("w-full")
+                # a label, not ui.code: that one renders Markdown, this one only text
+                ui.label(text).classes("w-full font-mono text-xs whitespace-pre overflow-auto")
 
     def _health_grid(self) -> None:
         self.health: Dict[str, Any] = {}
@@ -110,12 +112,12 @@ class BoardView:
                           "hub receiver", "device receiver", "retries", "link lost / restored",
                           "reboots", "samples", "events", "dropped events"):
                     ui.label(k).classes("text-gray-600")
-                    self.health[k] = ui.label("-").classes("font-mono") \
-                        .props(f'data-hw-health="{self.key}.{re.sub("[^a-z]+", "-", k)}"')
+                    self.health[k] = tag(ui.label("-").classes("font-mono"),
+                                         health=f'{self.key}.{re.sub("[^a-z]+", "-", k)}')
 
     def _set_state(self, board: Any) -> None:
         self.state.set_text(board.state)
-        self.state.props(f'color={_STATE_COLOURS.get(board.state, "grey")}')
+        self.state.props["color"] = _STATE_COLOURS.get(board.state, "grey")
         self.where.set_text(" ".join(x for x in (board.port or "unplugged",
                                                    f"id {board.board_id}" if board.board_id else "") if x))
 
@@ -146,8 +148,8 @@ class BoardView:
         with self.events:
             for e in new[-EVENTS_SHOWN:]:
                 stamp = time.strftime("%H:%M:%S", time.localtime(e.at)) + f".{int(e.at * 1000) % 1000:03d}"
-                lbl = ui.label(f"#{e.n} {stamp} {e.name} = {fmt_value(e.value)}") \
-                    .props(f'data-hw-event="{self.key}.{e.name}" data-hw-n="{e.n}"')
+                lbl = tag(ui.label(f"#{e.n} {stamp} {e.name} = {fmt_value(e.value)}"),
+                          event=f"{self.key}.{e.name}", n=e.n)
                 lbl.move(self.events, target_index=0)  # newest first
         rows = list(self.events)
         for old in rows[EVENTS_SHOWN:]:

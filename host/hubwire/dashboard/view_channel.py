@@ -13,6 +13,8 @@ from nicegui import ui
 
 from ..descriptor import Channel
 from ..errors import HubwireError
+from ..service.topics import safe_id
+from .attrs import tag
 from .feed import READ_MAX_HZ, BoardFeed, outcome_text
 from .model import RATES, ChannelRecord, decimate, fmt_value, is_integer, plottable, to_csv, widget_for
 
@@ -40,7 +42,7 @@ class ValueView:
         self._shown: Optional[float] = None
         ch = rec.channel
         self.key = _attr(feed.key, ch.name)
-        self.label = ui.label("-").classes("font-mono text-lg").props(f'data-hw-value="{_attr(feed.key, ch.name)}"')
+        self.label = tag(ui.label("-").classes("font-mono text-lg"), value=_attr(feed.key, ch.name))
         self.unit = _unit(ch)
         self.note = ui.label("").classes("text-xs text-gray-600")
 
@@ -56,7 +58,7 @@ class ValueView:
             return
         self._shown = rec.at
         self.label.set_text(fmt_value(rec.value) + self.unit)
-        self.label.props(f'data-hw-at="{rec.at * 1000:.1f}"')
+        tag(self.label, at=f"{rec.at * 1000:.1f}")
 
 
 class PlotView:
@@ -72,16 +74,15 @@ class PlotView:
         self._data: Dict[str, Any] = {"times": [], "rows": [], "cols": []}
         with ui.row().classes("items-center gap-2 w-full"):
             rates = [r for r in RATES if ch.streamable or r <= READ_MAX_HZ]  # reads are round trips
-            ui.select({r: f"{r} Hz" for r in rates}, value=self._nearest(rec.rate), label="rate",
-                      on_change=lambda e: feed.set_rate(ch.name, float(e.value))).classes("w-24") \
-                .props(f'dense data-hw-rate="{_attr(feed.key, ch.name)}"')
-            self.achieved = ui.label("").classes("text-xs text-gray-600") \
-                .props(f'data-hw-achieved="{_attr(feed.key, ch.name)}"')
+            tag(ui.select({r: f"{r} Hz" for r in rates}, value=self._nearest(rec.rate), label="rate",
+                          on_change=lambda e: feed.set_rate(ch.name, float(e.value))).classes("w-24"),
+                "dense", rate=_attr(feed.key, ch.name))
+            self.achieved = tag(ui.label("").classes("text-xs text-gray-600"), achieved=_attr(feed.key, ch.name))
             ui.select(list(WINDOWS), value="1 min", label="window",
                       on_change=lambda e: self._set_window(WINDOWS[str(e.value)])).classes("w-24").props("dense")
-            ui.switch("pause", on_change=lambda e: self._pause(bool(e.value))) \
-                .props(f'dense data-hw-pause="{_attr(feed.key, ch.name)}"')
-            ui.button("CSV", on_click=self._csv).props(f'flat dense data-hw-csv="{_attr(feed.key, ch.name)}"')
+            tag(ui.switch("pause", on_change=lambda e: self._pause(bool(e.value))),
+                "dense", pause=_attr(feed.key, ch.name))
+            tag(ui.button("CSV", on_click=self._csv), "flat", "dense", csv=_attr(feed.key, ch.name))
         self.chart = ui.echart({
             "animation": False,
             "grid": {"left": 50, "right": 10, "top": 30, "bottom": 25},
@@ -126,7 +127,8 @@ class PlotView:
     def _csv(self) -> None:
         d = self._data  # what is plotted now (frozen while paused)
         text = to_csv(d["cols"], d["times"], d["rows"])
-        ui.download.content(text.encode(), f"{self.feed.key}-{self.rec.channel.name}.csv", "text/csv")
+        # a file name: only [A-Za-z0-9_-] of the key and channel
+        ui.download.content(text.encode(), f"{safe_id(self.feed.key)}-{safe_id(self.rec.channel.name)}.csv", "text/csv")
 
 
 class InputView:
@@ -157,11 +159,11 @@ class InputView:
             else:
                 self.el = ui.input(value="" if start is None else (start if isinstance(start, str) else
                                                                    json.dumps(start))).classes("w-64")
-            self.el.props(f'data-hw-input="{a}"')
+            tag(self.el, input=a)
             if self.kind in ("number", "text", "json"):
                 self.el.on("keydown.enter", self._submit)
-                ui.button("set", on_click=self._submit).props(f'dense data-hw-set="{a}"')
-            self.status = ui.label("").classes("text-xs").props(f'data-hw-status="{a}"')
+                tag(ui.button("set", on_click=self._submit), "dense", set=a)
+            self.status = tag(ui.label("").classes("text-xs"), status=a)
         self.acked = start
         self._started = start is not None
 
@@ -215,7 +217,7 @@ class InputView:
     def _done(self, ok: bool, msg: str) -> None:
         self.status.set_text(msg)
         self.status.classes(replace="text-xs " + ("text-green-700" if ok else "text-red-700"))
-        self.status.props(f'data-hw-ok="{"1" if ok else "0"}" data-hw-t="{time.time() * 1000:.0f}"')
+        tag(self.status, ok="1" if ok else "0", t=f"{time.time() * 1000:.0f}")
 
 
 class ActionView:
@@ -227,10 +229,10 @@ class ActionView:
         with ui.row().classes("items-center gap-2"):
             self.arg = None
             if ch.codec.kind != "void":
-                self.arg = ui.input(label=ch.codec.name).classes("w-32").props(f'dense data-hw-arg="{a}"')
+                self.arg = tag(ui.input(label=ch.codec.name).classes("w-32"), "dense", arg=a)
                 self.arg.on("keydown.enter", self._call)
-            ui.button(ch.name, on_click=self._call).props(f'no-caps data-hw-call="{a}"')
-            self.result = ui.label("").classes("font-mono").props(f'data-hw-result="{a}"')
+            tag(ui.button(ch.name, on_click=self._call), "no-caps", call=a)
+            self.result = tag(ui.label("").classes("font-mono"), result=a)
         self.calls = 0
 
     def refresh(self, on_screen: bool = True) -> None:
@@ -251,7 +253,7 @@ class ActionView:
         self.calls += 1
         self.result.set_text(("-> " if ok else "") + msg)
         self.result.classes(replace="font-mono " + ("" if ok else "text-red-700"))
-        self.result.props(f'data-hw-ok="{"1" if ok else "0"}" data-hw-n="{self.calls}"')
+        tag(self.result, ok="1" if ok else "0", n=self.calls)
 
 
 def channel_views(feed: BoardFeed, ch: Channel) -> List[Any]:

@@ -128,9 +128,9 @@ class BoardBridge:
         if dev is None or desc is None:
             return
         readable = [ch for ch in desc.channels if ch.readable]
-        box, head = self.bridge.outbox, self.t.state(self.key, "")
+        box, head = self.bridge.outbox, self.t.board(self.key, "state", "")
         for topic in [t for t in box.latest if t.startswith(head)]:
-            if desc.by_name(topic[len(head):]) is None:
+            if self.t.channel(desc, topic[len(head):]) is None:
                 box.forget(topic)  # a channel the board's new firmware no longer has
         if readable:
             self._tasks.append(self.bridge.spawn(self._poll_states(dev, readable)))
@@ -240,6 +240,9 @@ class BoardBridge:
         try:
             if op == "rpc":
                 op, chan, payload = self._unwrap(payload, reply)
+            elif chan is not None and self.desc is not None:
+                ch = self.t.channel(self.desc, chan)  # a topic level: the channel it stands for
+                chan = ch.name if ch is not None else chan
             await self._command(op, chan or "", payload, reply)
         except BadPayload as e:
             await reply.error(op, chan, "InvalidValue", str(e))

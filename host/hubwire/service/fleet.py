@@ -6,9 +6,11 @@ none. A board that comes back (replugged, on the same or another port) is the sa
 when name and id match; an id-less board is taken for the unplugged one of its name (a caveat when
 two id-less boards share a name: after a replug they may swap keys).
 
-Keys clients use: the name, while no other board of that name is known; a later board of the same
-name gets ``name-<board id>`` (``name-2``, ``name-3``... without an id). ``name-<board id>`` and the
-current port path always resolve too (:meth:`Fleet.resolve`).
+Keys clients use (:func:`hubwire.service.topics.board_key`): the name, then ``--<board id>`` when the
+board has one, each part escaped where it is not plain (``rover``, ``rover--A1B2``,
+``a_b-xc14cddc0``); boards claiming the same name and id get ``---2``, ``---3``... The key depends on
+the board only, so restarts and replugs never move it. A name only one board has, ``name-<board id>``
+and the current port path resolve too (:meth:`Fleet.resolve`).
 
 Everything here runs on the service's one asyncio loop.
 """
@@ -27,6 +29,7 @@ from ..descriptor import Descriptor
 from ..errors import HubwireError, LinkLost
 from ..transport import SerialTransport
 from .ports import PortInfo, PortScanner
+from .topics import board_key
 
 __all__ = ["Board", "Fleet", "Changes", "UnknownBoard"]
 
@@ -150,7 +153,7 @@ class Fleet:
             return dataclasses.replace(b)
         real = os.path.realpath(what) if "://" not in what else what
         for b in self._boards.values():
-            if (b.board_id is not None and f"{b.name}-{b.board_id}" == what) or (
+            if (b.board_id is not None and what in (f"{b.name}-{b.board_id}", f"{b.name}--{b.board_id}")) or (
                     b.port is not None and (b.port == what or self._real(b.port) == real)):
                 return dataclasses.replace(b)
         named = [b for b in self._boards.values() if b.name == what]
@@ -307,7 +310,8 @@ class Fleet:
         dev.on("*", lambda _ev, b=board: setattr(b, "events", b.events + 1))
         for kind in ("link_lost", "link_restored", "reconnect"):
             dev.on(kind, lambda *_a, b=board, d=dev, r=real: self._device_changed(b, d, r))
-        log.info("hubwire serve: %s (%s) on %s", board.key, board_id or "no board id", info.path)
+        # name and id as repr: a device's strings never reach the log as raw text
+        log.info("hubwire serve: %s (name %r, board id %r) on %s", board.key, name, board_id, info.path)
         self._emit(board)
 
     def _match(self, name: str, board_id: Optional[str], path: str) -> Board:
@@ -315,13 +319,12 @@ class Fleet:
         if free:
             free.sort(key=lambda b: b.last_port != path)  # an id-less board: its old port first
             return free[0]
-        key = name
-        if any(b.name == name for b in self._boards.values()):
-            key = f"{name}-{board_id}" if board_id is not None else name
-            n = 1
-            while key in self._boards:  # (two boards that claim one id get a number too)
-                n += 1
-                key = f"{name}-{n}" if board_id is None else f"{name}-{board_id}-{n}"
+        # the key is a function of the board's identity, never of the order boards are found in;
+        # only boards that claim the same name and id (id-less twins) are numbered
+        n = 1
+        while board_key(name, board_id, n) in self._boards:
+            n += 1
+        key = board_key(name, board_id, n)
         board = Board(key=key, name=name, board_id=board_id, port=None, state="connecting", device=None)
         self._boards[key] = board
         return board

@@ -11,7 +11,7 @@ from typing import Any, Dict, List, Optional, Tuple
 from .. import __version__
 from ..descriptor import Channel, Descriptor
 from ..wire.scalars import INTEGER_TYPES, NUMERIC_TYPES, SCALARS
-from .topics import OFFLINE, ONLINE, Topics, dumps, safe_id
+from .topics import OFFLINE, ONLINE, Topics, dumps, level
 
 __all__ = ["entity_kind", "discovery_messages", "config_topic", "ORIGIN"]
 
@@ -44,16 +44,22 @@ def entity_kind(ch: Channel) -> Optional[str]:
 
 
 def config_topic(topics: Topics, kind: str, key: str, channel: str) -> str:
-    """``<discovery_prefix>/<component>/<node_id>/<object_id>/config``."""
-    return f"{topics.discovery_prefix}/{kind}/{safe_id(key)}/{safe_id(channel)}/config"
+    """``<discovery_prefix>/<component>/<node_id>/<object_id>/config``: node_id is the board's topic
+    level (its key), object_id the channel's (both ``[A-Za-z0-9_-]``, distinct by construction)."""
+    return f"{topics.discovery_prefix}/{kind}/{_node(topics, key)}/{level(channel)}/config"
 
 
-def _unique(key: str, channel: str) -> str:
-    return f"hubwire_{safe_id(key)}_{safe_id(channel)}"
+def _node(topics: Topics, key: str) -> str:
+    return topics.board(key).rpartition("/")[2]
 
 
-def _device(key: str, desc: Descriptor, board_id: Optional[str]) -> Dict[str, Any]:
-    dev: Dict[str, Any] = {"identifiers": [f"hubwire_{safe_id(key)}"], "name": key,
+def _unique(topics: Topics, key: str, channel: str) -> str:
+    # levels never contain "--", so the last "--" always separates board and channel
+    return f"hubwire_{_node(topics, key)}--{level(channel)}"
+
+
+def _device(topics: Topics, key: str, desc: Descriptor, board_id: Optional[str]) -> Dict[str, Any]:
+    dev: Dict[str, Any] = {"identifiers": [f"hubwire_{_node(topics, key)}"], "name": key,
                            "manufacturer": "Hubwire", "model": desc.name}
     if desc.firmware:
         dev["sw_version"] = desc.firmware
@@ -80,8 +86,8 @@ def entity_config(topics: Topics, service_id: str, key: str, desc: Descriptor, b
         return None
     cfg: Dict[str, Any] = {
         "name": ch.name,
-        "unique_id": _unique(key, ch.name),
-        "device": _device(key, desc, board_id),
+        "unique_id": _unique(topics, key, ch.name),
+        "device": _device(topics, key, desc, board_id),
         "origin": ORIGIN,
         "availability": [
             {"topic": topics.service_status(service_id), "payload_available": ONLINE,

@@ -41,9 +41,9 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
                    help="also serve the dashboard on this port (hubwire.dashboard; docs/DASHBOARD.md)")
     s.add_argument("--http-host", default="127.0.0.1",
                    help="address the dashboard listens on (default 127.0.0.1: this machine only)")
-    s.add_argument("--token", default=None,
-                   help="secret the dashboard's browsers must give (?token=...); made up and printed when "
-                        "--http-host is not loopback and none is given")
+    from ..dashboard import add_access_options  # (imports without NiceGUI)
+
+    add_access_options(s, "--http-host")
     s.add_argument("-v", "--verbose", action="store_true", help="log every board and link change")
     s.set_defaults(fn=cmd_serve)
     s = sub.add_parser("list", parents=[out], help="boards known to the running hubwire serve")
@@ -99,19 +99,22 @@ def mqtt_bridge() -> Callable[..., Any]:
 def dashboard(args: argparse.Namespace) -> Callable[[Fleet], Awaitable[Any]]:
     """The dashboard on the service's boards (``--http``), or SystemExit saying how to install it."""
     try:
-        from ..dashboard import resolve_token, run_dashboard
+        from ..dashboard import address_line, load_token, run_dashboard
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --http needs the dashboard's libraries, which this installation "
                          f"lacks ({e}); install them with: pip install 'hubwire[dashboard]'") from None
-    token = resolve_token(args.http_host, args.token)
+    try:
+        token, made = load_token(args.token, args.token_file)
+    except (OSError, ValueError) as e:
+        raise SystemExit(f"hubwire serve: dashboard token: {e}") from None
 
     def started() -> None:
-        where = "localhost" if args.http_host in ("127.0.0.1", "::1") else args.http_host
-        print(f"hubwire serve: dashboard at http://{where}:{args.http}/" + (f"?token={token}" if token else ""),
+        # a token the user gave is never printed (this goes to the journal under systemd)
+        print(f"hubwire serve: dashboard at {address_line(args.http_host, args.http, token, made)}",
               file=sys.stderr, flush=True)
 
     async def run(fleet: Fleet) -> None:
-        await run_dashboard(fleet, args.http_host, args.http, token, started=started)
+        await run_dashboard(fleet, args.http_host, args.http, token, started=started, allow_hosts=args.allow_host)
     return run
 
 

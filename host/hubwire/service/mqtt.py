@@ -20,6 +20,7 @@ from paho.mqtt.properties import Properties
 
 from .board import BoardBridge
 from .outbox import Outbox
+from .retire import Retired
 from .topics import OFFLINE, ONLINE, BridgeConfig, Topics, dumps
 
 if TYPE_CHECKING:
@@ -92,6 +93,8 @@ class Bridge:
         self.connections = 0
         #: boards other services on the same broker announce (key: service id), from their descriptors
         self.elsewhere: Dict[str, str] = {}
+        #: keys this service published that a board no longer has (their retained topics are cleared)
+        self.retired = Retired(self.topics, config.service_id)
         self._tasks: Set["asyncio.Task[Any]"] = set()
 
     # ---------------------------------------------------------------------------- lifecycle
@@ -127,7 +130,7 @@ class Bridge:
             await client.publish(status, ONLINE, qos=1, retain=True)
             for f in self.topics.command_filters():
                 await client.subscribe(f, qos=1)
-            await client.subscribe(self.topics.descriptor("+"), qos=1)
+            await client.subscribe(self.topics.descriptor_filter(), qos=1)
             if self.config.discovery_prefix:
                 await client.subscribe(f"{self.config.discovery_prefix}/status", qos=1)
             self.outbox.all_dirty()
@@ -190,6 +193,8 @@ class Bridge:
         bb = self.boards.get(board.key)
         if bb is None:
             bb = self.boards[board.key] = BoardBridge(self, board.key)
+            for t in self.retired.seen(board.key, (board.name, board.board_id)):
+                self.outbox.forget(t)
         bb.update(board)
 
     # ------------------------------------------------------------------------------ sending
@@ -242,6 +247,10 @@ class Bridge:
 
     def _note_descriptor(self, topic: str, payload: Any) -> None:
         key = topic[len(self.topics.prefix) + 1:-len("/descriptor")]
+        if key not in self.boards:
+            ours = [(k, (b.board.name, b.board.board_id)) for k, b in self.boards.items() if b.board is not None]
+            for t in self.retired.note(key, payload, ours):
+                self.outbox.forget(t)
         try:
             service = json.loads(bytes(payload)).get("service") if payload else None
         except (ValueError, TypeError, AttributeError):

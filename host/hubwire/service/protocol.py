@@ -17,6 +17,8 @@ __all__ = ["PROTOCOL", "socket_path", "default_serve_socket", "board_json", "err
 PROTOCOL = 1
 #: where the system service (systemd, RuntimeDirectory=hubwire) listens
 SYSTEM_SOCKET = "/run/hubwire/hubwire.sock"
+#: where a user's service listens without $XDG_RUNTIME_DIR: TMP/hubwire-UID (made 0700 by the service)
+TMP = "/tmp"
 #: the longest line either side accepts
 MAX_LINE = 1 << 20
 
@@ -40,15 +42,26 @@ def _user_socket() -> Optional[str]:
     return os.path.join(run, "hubwire", "hubwire.sock") if run else None
 
 
+def _tmp_socket() -> str:
+    return os.path.join(TMP, f"hubwire-{os.getuid()}", "hubwire.sock")
+
+
 def socket_path() -> Optional[str]:
-    """The socket a client tries: $HUBWIRE_SOCKET, else the user's service, else the system one
-    (the first that exists); None when there is none."""
+    """The socket a client tries: $HUBWIRE_SOCKET, else the user's service ($XDG_RUNTIME_DIR/hubwire,
+    then /tmp/hubwire-UID), else the system one (the first that exists); None when there is none.
+    A socket in a directory another user made, or others may write to, is skipped (with a warning):
+    whoever made it could stand in for the service."""
     env = os.environ.get("HUBWIRE_SOCKET")
     if env:
         return env
-    for p in (_user_socket(), SYSTEM_SOCKET):
+    from .sockdir import log, untrusted
+
+    for p in (_user_socket(), _tmp_socket(), SYSTEM_SOCKET):
         if p and os.path.exists(p):
-            return p
+            why = untrusted(os.path.dirname(p)) if p != SYSTEM_SOCKET else None
+            if why is None:
+                return p
+            log.warning("hubwire: not using the service socket %s: %s", p, why)
     return None
 
 
@@ -60,7 +73,7 @@ def default_serve_socket() -> str:
         return env
     if os.geteuid() == 0:
         return SYSTEM_SOCKET
-    return _user_socket() or os.path.join("/tmp", f"hubwire-{os.getuid()}", "hubwire.sock")
+    return _user_socket() or _tmp_socket()
 
 
 def encode(obj: Dict[str, Any]) -> bytes:

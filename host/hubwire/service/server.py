@@ -18,6 +18,7 @@ from ..cli_support import jsonable
 from ..errors import HubwireError, LinkLost, StreamEnded
 from .fleet import Fleet
 from .protocol import MAX_LINE, PROTOCOL, board_json, encode, error_json
+from .sockdir import ensure_dir
 
 __all__ = ["Server"]
 
@@ -28,7 +29,8 @@ MAX_BACKLOG = 4 << 20
 
 
 class Server:
-    """Listens on ``path`` (a Unix socket, mode 0660) and serves ``fleet`` to every client."""
+    """Listens on ``path`` (a Unix socket, mode 0660, in a directory only this user may write to:
+    :mod:`hubwire.service.sockdir`) and serves ``fleet`` to every client."""
 
     def __init__(self, fleet: Fleet, path: str) -> None:
         self.fleet = fleet
@@ -37,9 +39,7 @@ class Server:
         self._clients: "set[_Client]" = set()
 
     async def start(self) -> None:
-        d = os.path.dirname(self.path)
-        if d:
-            os.makedirs(d, exist_ok=True)
+        ensure_dir(self.path)  # ours, 0700: never a directory another user made first
         if os.path.exists(self.path) and stat.S_ISSOCK(os.stat(self.path).st_mode):
             os.unlink(self.path)  # left by a service that did not stop cleanly
         self._server = await asyncio.start_unix_server(self._client, self.path, limit=MAX_LINE)

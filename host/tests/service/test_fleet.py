@@ -5,7 +5,7 @@ device paths are the emulators' ptys."""
 from __future__ import annotations
 
 import asyncio
-from typing import Any, Callable, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from conftest import Emulator
 from hubwire.service.fleet import Board, Changes, Fleet, UnknownBoard
@@ -44,32 +44,32 @@ def test_usb_serial_numbers_tell_boards_apart_and_follow_a_replug(emulators: Cal
         await fleet.start()
         a = emulators("a")
         usb.append(UsbPort(a.link, "SN-A"))
-        await until(changes, seen, lambda b: b.key == "rover" and b.state == "ready")
+        await until(changes, seen, lambda b: b.key == "rover--SN-A" and b.state == "ready")
         b = emulators("b")
         usb.append(UsbPort(b.link, "SN-B"))
-        got = await until(changes, seen, lambda b: b.key == "rover-SN-B" and b.state == "ready")
+        got = await until(changes, seen, lambda b: b.key == "rover--SN-B" and b.state == "ready")
         assert (got.name, got.board_id, got.port, got.attached) == ("rover", "SN-B", b.link, 1)
-        assert fleet.get("rover").board_id == "SN-A"
-        assert fleet.resolve("rover-SN-A").key == "rover"  # name-<board id> always reaches a board
-        assert fleet.resolve(b.link).key == "rover-SN-B"   # and so does its port
+        assert fleet.get("rover--SN-A").board_id == "SN-A"
+        assert fleet.resolve("rover-SN-A").key == "rover--SN-A"  # name-<board id> always reaches a board
+        assert fleet.resolve(b.link).key == "rover--SN-B"   # and so does its port
         old_dev = got.device
         assert old_dev is not None and await old_dev.read("battery") > 0
 
         b.stop()  # unplug: the port goes away
         usb.pop()
-        gone = await until(changes, seen, lambda x: x.key == "rover-SN-B" and x.state == "unplugged")
+        gone = await until(changes, seen, lambda x: x.key == "rover--SN-B" and x.state == "unplugged")
         assert gone.port is None and gone.device is None
         c = emulators("c")  # replugged: another port name, the same serial number
         usb.append(UsbPort(c.link, "SN-B"))
-        back = await until(changes, seen, lambda x: x.key == "rover-SN-B" and x.state == "ready")
+        back = await until(changes, seen, lambda x: x.key == "rover--SN-B" and x.state == "ready")
         assert (back.port, back.attached) == (c.link, 2)
         assert back.device is not None and back.device is not old_dev
         await back.device.write("left", 0.5)
-        assert await fleet.get("rover-SN-B").device.read("left") == 0.5  # type: ignore[union-attr]
-        assert await fleet.get("rover").device.read("left") == 0.0  # type: ignore[union-attr]
+        assert await fleet.get("rover--SN-B").device.read("left") == 0.5  # type: ignore[union-attr]
+        assert await fleet.get("rover--SN-A").device.read("left") == 0.0  # type: ignore[union-attr]
 
-        assert [x.key for x in fleet.boards()] == ["rover", "rover-SN-B"]
-        states = [(x.state, x.port) for x in seen if x.key == "rover-SN-B"]
+        assert [x.key for x in fleet.boards()] == ["rover--SN-A", "rover--SN-B"]
+        states = [(x.state, x.port) for x in seen if x.key == "rover--SN-B"]
         # (the link may be seen lost, the port failing, before the scan sees the port gone)
         assert [st for st in states if st != ("lost", b.link)] == [
             ("ready", b.link), ("unplugged", None), ("ready", c.link)]
@@ -77,7 +77,7 @@ def test_usb_serial_numbers_tell_boards_apart_and_follow_a_replug(emulators: Cal
             fleet.get("nope")
             raise AssertionError("no UnknownBoard")
         except UnknownBoard as e:
-            assert isinstance(e, KeyError) and "rover (ready)" in str(e) and "rover-SN-B (ready)" in str(e)
+            assert isinstance(e, KeyError) and "rover--SN-A (ready)" in str(e) and "rover--SN-B (ready)" in str(e)
         await changes.aclose()
         await fleet.close()
         assert all(x.device is None or x.device.state == "closed" for x in fleet.boards())
@@ -127,7 +127,7 @@ def test_board_ids_the_devices_report_keep_their_keys_when_replugged_swapped(
         b = emulators("p2", "--board-id", "bb02")
         await until(changes, seen, lambda b: b.board_id == "bb02" and b.state == "ready")
         keys = {x.board_id: x.key for x in fleet.boards()}
-        assert keys == {"aa01": "rover", "bb02": "rover-bb02"}
+        assert keys == {"aa01": "rover--aa01", "bb02": "rover--bb02"}
         a.stop()
         b.stop()
         await until(changes, seen, lambda _: all(x.state == "unplugged" for x in fleet.boards()))
@@ -135,8 +135,34 @@ def test_board_ids_the_devices_report_keep_their_keys_when_replugged_swapped(
         emulators("p4", "--board-id", "aa01")
         await until(changes, seen, lambda _: all(x.state == "ready" for x in fleet.boards()))
         assert {x.board_id: x.key for x in fleet.boards()} == keys
-        assert fleet.get("rover-bb02").port is not None and fleet.get("rover-bb02").port.endswith("p3")
-        assert fleet.get("rover").port is not None and fleet.get("rover").port.endswith("p4")
+        assert fleet.get("rover--bb02").port is not None and fleet.get("rover--bb02").port.endswith("p3")
+        assert fleet.get("rover--aa01").port is not None and fleet.get("rover--aa01").port.endswith("p4")
         await changes.aclose()
         await fleet.close()
     asyncio.run(main())
+
+
+def test_a_restart_finding_the_boards_in_another_order_gives_each_its_key(
+        emulators: Callable[..., Emulator], boards_dir: str, tmp_path: Any) -> None:
+    """Keys come from the board (name and id), not from which board a scan finds first: a service
+    restarted with the boards found the other way round gives each board the key it had."""
+    async def run(first: str, second: str) -> Dict[Optional[str], str]:
+        fleet = Fleet(globs=[boards_dir + "/*"], usb=False, poll_interval=0.1, udev=False,
+                      cache_dir=str(tmp_path / "cache"))
+        changes = fleet.changes()
+        seen: List[Board] = []
+        await fleet.start()
+        emus = [emulators(f"{first}-0", "--board-id", first)]
+        await until(changes, seen, lambda b: b.board_id == first and b.state == "ready")
+        emus.append(emulators(f"{second}-0", "--board-id", second))
+        await until(changes, seen, lambda b: b.board_id == second and b.state == "ready")
+        keys = {x.board_id: x.key for x in fleet.boards()}
+        await changes.aclose()
+        await fleet.close()
+        for e in emus:
+            e.stop()
+        return keys
+
+    before = asyncio.run(run("aa01", "bb02"))
+    after = asyncio.run(run("bb02", "aa01"))
+    assert before == after == {"aa01": "rover--aa01", "bb02": "rover--bb02"}

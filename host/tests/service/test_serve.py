@@ -137,15 +137,15 @@ def test_boards_with_one_name_get_keys_of_their_own(serve: Serve, emulators: Cal
     emulators("a")
     serve.wait_state("rover", "ready")
     emulators("b")
-    serve.wait_state("rover-2", "ready")
-    with hubwire.connect("rover") as r1, hubwire.connect("rover-2") as r2:
+    serve.wait_state("rover---2", "ready")
+    with hubwire.connect("rover") as r1, hubwire.connect("rover---2") as r2:
         r1.left = 0.5
         r2.left = -0.5
         assert (r1.left, r2.left) == (0.5, -0.5)
     r = serve.cli("get", "nosuch", "left", "--json", check=False)
     err = json.loads(r.stdout)
     assert r.returncode == 1 and err["error"] == "UnknownBoard"
-    assert "rover (ready)" in err["message"] and "rover-2 (ready)" in err["message"]
+    assert "rover (ready)" in err["message"] and "rover---2 (ready)" in err["message"]
 
 
 def test_service_not_running(emulators: Callable[[str], Emulator], tmp_path: Any,

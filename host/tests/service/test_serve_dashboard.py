@@ -37,27 +37,28 @@ def test_the_dashboard_shows_every_board_the_service_owns(boards_dir: str, tmp_p
     emulators("a", "--board-id", "aa01")
     serve.start()
     try:
-        serve.wait_state("rover", "ready")
+        serve.wait_state("rover--aa01", "ready")
         b = emulators("b", "--board-id", "bb02")
-        serve.wait_state("rover-bb02", "ready")
-        wait_for(lambda: "dashboard at http://localhost:%d/" % http in serve.log_text(), what="the dashboard")
+        serve.wait_state("rover--bb02", "ready")
+        url = wait_for(lambda: re.search(r"dashboard at (http://localhost:%d/\?token=\S+)" % http, serve.log_text()),
+                       what="the dashboard")[1]
         with playwright_api.sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
             page = browser.new_page(viewport={"width": 1400, "height": 1000})
             page.set_default_timeout(WAIT_MS)
-            page.goto(f"http://localhost:{http}/")
-            wait_text(page, sel("state", "rover"), "^ready$")
-            wait_text(page, sel("state", "rover-bb02"), "^ready$")
+            page.goto(url)
+            wait_text(page, sel("state", "rover--aa01"), "^ready$")
+            wait_text(page, sel("state", "rover--bb02"), "^ready$")
             # another client of the service writes; the page shows the board's value
-            serve.cli("set", "rover-bb02", "left", "0.25")
-            wait_text(page, sel("value", "rover-bb02.left"), r"^0\.25 m/s$")
-            wait_text(page, sel("value", "rover.left"), r"^0 m/s$")
+            serve.cli("set", "rover--bb02", "left", "0.25")
+            wait_text(page, sel("value", "rover--bb02.left"), r"^0\.25 m/s$")
+            wait_text(page, sel("value", "rover--aa01.left"), r"^0 m/s$")
             # unplugged, then back on another port: the same key, ready again
             b.stop()
-            wait_text(page, sel("state", "rover-bb02"), "^unplugged$")
+            wait_text(page, sel("state", "rover--bb02"), "^unplugged$")
             emulators("c", "--board-id", "bb02")
-            wait_text(page, sel("state", "rover-bb02"), "^ready$")
-            wait_text(page, sel("state", "rover"), "^ready$")
+            wait_text(page, sel("state", "rover--bb02"), "^ready$")
+            wait_text(page, sel("state", "rover--aa01"), "^ready$")
             browser.close()
     finally:
         status = serve.stop()

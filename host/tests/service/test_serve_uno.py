@@ -33,15 +33,15 @@ def test_commands_through_the_service_neither_reset_the_uno_nor_trip_its_failsaf
     serve.wait_state("rover", "ready", uno.link)
     emulators("e1")  # two emulated Rovers beside it: three boards called "rover"
     emulators("e2")
-    serve.wait_state("rover-2", "ready")
-    serve.wait_state("rover-3", "ready")
+    serve.wait_state("rover---2", "ready")
+    serve.wait_state("rover---3", "ready")
     assert uno.resets() == 1  # the service's open
     serve.cli("set", "rover", "led", "true")
     assert serve.cli("get", "rover", "led").stdout.strip() == "True"
-    for key, value in (("rover", "-0.25"), ("rover-2", "0.5"), ("rover-3", "0.75")):
+    for key, value in (("rover", "-0.25"), ("rover---2", "0.5"), ("rover---3", "0.75")):
         serve.cli("set", key, "left", value)
     time.sleep(LOSS_WINDOW)
-    for key, value in (("rover", "-0.25"), ("rover-2", "0.5"), ("rover-3", "0.75")):
+    for key, value in (("rover", "-0.25"), ("rover---2", "0.5"), ("rover---3", "0.75")):
         assert serve.cli("get", key, "left").stdout.strip() == value
         assert serve.cli("get", key, "failsafes").stdout.strip() == "0"
     assert serve.cli("get", "rover", "applied").stdout.strip() == "2"  # each write applied once

@@ -22,3 +22,14 @@ def test_unit_serves_on_the_socket_clients_try_and_caches_in_its_cache_directory
     assert SYSTEM_SOCKET == f"/run/{svc['RuntimeDirectory']}/hubwire.sock"
     assert svc["Environment"] == f"HUBWIRE_CACHE_DIR=/var/cache/{svc['CacheDirectory']}"
     assert svc["Group"] == "dialout" and unit["Install"]["WantedBy"] == "multi-user.target"
+
+
+def test_unit_makes_the_socket_directory_for_its_group_only() -> None:
+    """/run/hubwire: the service's user writes, its group (dialout) may enter, other users not at all."""
+    unit = configparser.ConfigParser(strict=False, interpolation=None)
+    unit.optionxform = str  # type: ignore[assignment,method-assign]
+    with open(UNIT) as fh:
+        unit.read_file(fh)
+    svc = unit["Service"]
+    assert int(svc["RuntimeDirectoryMode"], 8) == 0o750
+    assert svc["Group"] and svc["User"] != "root"
