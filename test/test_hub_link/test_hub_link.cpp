@@ -361,6 +361,26 @@ TEST_F(HubLinkTest, AHubChunkBetweenAControlAndItsRetryKeepsItExactlyOnce) {
   EXPECT_EQ(heatCalls, 1);
 }
 
+// A hub read ends the window of the control before it (PROTOCOL.md 4.1); an answer to the device's
+// own chunk request afterwards is no hub transaction and must not open that window again.
+TEST_F(HubLinkTest, AChunkAnswerAfterAHubReadDoesNotReviveTheControlBeforeIt) {
+  link();
+  bind({0, 0, 0, 0});
+  ASSERT_TRUE(device.readHubDescriptor(0, gotChunk, fail));
+  auto j = only(step(), kMsgChunk);
+  ASSERT_EQ(j.size(), 1u);
+  sendFrame(stream, kMsgControl, 0x61, 2, Bytes{1});  // heat on
+  EXPECT_EQ(only(step(), kMsgAck).size(), 1u);
+  sendFrame(stream, kMsgRequest, 0x62, 1);  // a read: the control's window ends
+  EXPECT_EQ(only(step(), kMsgResponse).size(), 1u);
+  sendFrame(stream, kMsgChunk, j[0].seq, 0, Bytes{0, 0, 2, 0, '{', '}'});
+  step();
+  EXPECT_EQ(chunkText, "{}");
+  sendFrame(stream, kMsgControl, 0x61, 2, Bytes{1});  // a new control that happens to take that seq
+  EXPECT_EQ(only(step(), kMsgAck).size(), 1u);
+  EXPECT_EQ(heatCalls, 2);
+}
+
 TEST_F(HubLinkTest, ReadsTheHubDescriptorInChunks) {
   const std::string hubJson = "{\"p\":1,\"n\":\"hub\",\"ch\":[{\"id\":1,\"n\":\"setpoint\",\"a\":\"r\",\"t\":\"f32\"}]}";
   link();

@@ -167,6 +167,8 @@ TEST_F(MissionTest, StateIsTheLatestRunAndWhetherItRuns) {
   EXPECT_EQ(s.type, kMsgResponse);
   EXPECT_EQ(s.payload, (Bytes{run, 1}));
   ASSERT_TRUE(device.finish(drive, 2.0f));
+  EXPECT_EQ(state(kDrive).payload, (Bytes{run, 1}));  // its final not sent yet
+  step();                                              // sent now
   EXPECT_EQ(state(kDrive).payload, (Bytes{run, 0}));
 }
 
@@ -321,12 +323,25 @@ TEST_F(MissionTest, AStartWhileTheFinalIsUnsentIsBusy) {
   auto p = only(step(), kMsgMission);  // in flight, unacked
   ASSERT_EQ(p.size(), 1u);
   device.finish(drive, 2.0f);  // waits behind it
+  EXPECT_EQ(state(kDrive).payload[1], 1);  // still running for the hub: R agrees with BUSY
   EXPECT_EQ(start(kDrive, le(1.0f)).payload, nak(kErrBusy));
   ack(p[0]);
   auto f = only(step(), kMsgMission);
   ASSERT_EQ(f.size(), 1u);
   EXPECT_EQ(start(kDrive, le(1.0f)).type, kMsgResponse);  // the final sent (not yet acked)
   EXPECT_EQ(starts, 2);
+}
+
+TEST_F(MissionTest, StateSaysRunningUntilTheFinalIsSent) {
+  started();
+  device.progress(drive, 0.5f);
+  auto p = only(step(), kMsgMission);
+  ASSERT_EQ(p.size(), 1u);
+  device.finish(drive, 2.0f);
+  EXPECT_EQ(state(kDrive).payload[1], 1);
+  ack(p[0]);
+  ASSERT_EQ(only(step(), kMsgMission).size(), 1u);  // the final goes out
+  EXPECT_EQ(state(kDrive).payload[1], 0);
 }
 
 TEST_F(MissionTest, TwoMissionsTakeTurnsOneUpdateInFlight) {

@@ -52,7 +52,6 @@ void Session::hubSessionCheck() {
   l.bound = false;
   l.bind.state = kBindPending;
   l.eventValid = false;
-  l.controlValid = false;
   l.cValid = l.unsure = false;  // a new hub remembers nothing of the device's controls
 }
 
@@ -70,11 +69,7 @@ bool Session::hubFrame(const Frame& f) {
         l.health.dropped = loadU16(p + 8);
       }
       return false;
-    case kMsgChunk:  // an answer: counted as a hub transaction on its way here, which it is not
-      lastTxnControl_ = l.controlValid;
-      lastTxnSeq_ = l.controlSeq;
-      lastTxnId_ = l.controlId;
-      // fall through - an answer like the others
+    case kMsgChunk:  // an answer (longer than a request: session.cpp sends only those here)
     case kMsgAck:
     case kMsgNak:
     case kMsgResponse: {
@@ -87,11 +82,8 @@ bool Session::hubFrame(const Frame& f) {
       if (!linked_) return sendNak(kErrNotLinked), true;
       hubEvent(f);
       return true;
-    case kMsgControl:  // about to be answered (linked): the bind report, or a control to remember
+    case kMsgControl:  // about to be answered (linked): the bind report is the hub link's
       if (f.id == 0) return hubBind(f), true;
-      l.controlValid = true;
-      l.controlSeq = f.seq;
-      l.controlId = f.id;
       return false;
     default:
       return false;
@@ -164,7 +156,6 @@ void Session::hubEvent(const Frame& f) {
 void Session::hubBind(const Frame& f) {
   HubLink& l = hubLink;
   uint8_t code = f.len != 1 + l.count ? (uint8_t)kErrBadLength : (uint8_t)kOk;
-  l.controlValid = false;
   replyType_ = code == kOk ? kMsgAck : kMsgNak;
   replyLen_ = code == kOk ? 0 : 1;
   replyData_[0] = code;

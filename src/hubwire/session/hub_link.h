@@ -81,8 +81,6 @@ class HubLink {
   bool hubKnown;    // hubNonce: the hub session the link last saw (the session's, copied)
   uint32_t hubNonce;
   bool bound;       // the bind report of this hub session has arrived
-  bool controlValid;  // controlSeq/Id: the hub's last control, which a hub chunk answer must not
-  uint8_t controlSeq, controlId;  // make the session forget (hub_link.cpp)
   bool eventValid;  // eventSeq/eventId: the last hub event delivered (duplicates are re-acked)
   uint8_t eventSeq, eventId;
   BindStatus bind;

@@ -43,7 +43,8 @@ bool Session::missionFrame(const Frame& f) {
   if (f.type == kMsgRequest) {
     if (f.len != 0) return sendNak(kErrBadLength), true;
     out[0] = m.run_;
-    out[1] = m.running() ? 1 : 0;
+    // running for the hub until its final is sent: exactly when a start is refused BUSY
+    out[1] = (m.flags_ & (MissionState::kRunning | MissionState::kFinalPending)) ? 1 : 0;
     return reply(kMsgResponse, 2), true;
   }
   uint8_t code = kOk;
@@ -70,9 +71,7 @@ bool Session::missionFrame(const Frame& f) {
     type = kMsgNak;
     out[0] = code;
   }
-  // The hub link notes every control (a chunk answer of the hub's must not make the session
-  // forget this one); then the answer is remembered for a retry of this control.
-  if (HubwireHub<true, void>::dispatch) HubwireHub<true, void>::dispatch(*this, true);
+  // The answer is remembered for a retry of this control.
   replyType_ = type;
   replyLen_ = len;
   replyData_[0] = out[0];

@@ -107,6 +107,10 @@ void Session::handle(const Frame& f) {
     case kMsgNak:
       return onAck(f, f.type == kMsgNak);
     case kMsgChunk:
+      // A request is 3 bytes, an answer (to the device's own J, hub_link.cpp) at least 4: an answer
+      // is no hub transaction, so it passes by the link check and the duplicate memory.
+      if (f.len > kChunkRequestSize && f.len != 0xFF && hubHook(*this, true)) return;
+      break;
     case kMsgRequest:
     case kMsgControl:
     case kMsgSubscribe:
@@ -203,10 +207,7 @@ void Session::onAck(const Frame& f, bool nak) {
 }
 
 void Session::onChunk(const Frame& f) {
-  if (f.len != kChunkRequestSize) {
-    if (hubHook(*this, true)) return;  // a chunk of the hub's descriptor (hub_link.cpp)
-    return sendNak(kErrBadLength);
-  }
+  if (f.len != kChunkRequestSize) return sendNak(kErrBadLength);  // a reassembled one (0xFF)
   uint16_t offset = loadU16(f.payload);
   uint8_t want = f.payload[2];
   uint16_t total = table(&ChannelTable::jsonLength);
