@@ -7,7 +7,8 @@ host/tests/test_protocol_rules.py (Python, the hub) play them. Kinds:
 - device_script: steps played against a device built with the defaults and the channels
   DEVICE_CHANNELS names. Each step: advance the clock by advance_ms, feed the hub frames, emit
   the event if any, run update() once, and compare every frame the device wrote, in order, with
-  device (a device hello is compared by hello_flags & 3 only: its nonce and hash vary).
+  device (a device hello is compared by hello_flags & 3 and, when digest is given, by its size: 32
+  bytes with the digest, 16 without; its nonce and hash vary).
 - hub_script: frames a device sends once the hub is connected (a hello among them is the device's
   own, same nonce, with hello_flags); hub_answers are the frames of type ACK, NAK and hello the hub
   must send back, in order; app the link callbacks the application sees.
@@ -128,8 +129,18 @@ def device_scripts() -> List[Dict[str, Any]]:
         step([nak(1, LEVEL, N.NOT_LINKED)], [fr(m.REQUEST, 1, LEVEL)]),
     ])
     add("an unlinked device answers a heartbeat with its hello, REPLY clear", "4.2", [
-        step([device_hello(False)], [fr(m.HEARTBEAT, 1, 0, m.Heartbeat(1, 0, 0, 0, 0).pack())]),
+        # freshly booted: it has heard no hub that takes 32 bytes, so no digest (7.1)
+        step([device_hello(False, digest=False)], [fr(m.HEARTBEAT, 1, 0, m.Heartbeat(1, 0, 0, 0, 0).pack())]),
         LINK,
+    ])
+    add("after a link loss (no reset) the device's hello answering a heartbeat carries the digest", "7.1", [
+        LINK,  # the hub's hello takes 255 bytes: the device keeps that across the link loss
+        step([beat(2, 250)], advance_ms=250),
+        step([beat(3, 250)], advance_ms=250),
+        step([beat(4, 250)], advance_ms=250),
+        step([], advance_ms=250),  # 1000 ms without a hub frame: link lost
+        step([device_hello(False, digest=True)], [fr(m.HEARTBEAT, 5, 0, m.Heartbeat(5, 250, 0, 0, 0).pack())]),
+        step([device_hello(True), beat(5, 0)], [hub_hello(0x51)], advance_ms=100),
     ])
     add("a hub nonce of 0 is taken like any other", "3.1", [
         step([device_hello(True), beat(1, 0)], [hub_hello(0)]),

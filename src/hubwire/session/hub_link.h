@@ -18,6 +18,15 @@ namespace hubwire {
 class Session;
 
 /// Whether the hub bound what the sketch expects of it (its bind report, PROTOCOL.md 10.4).
+///   kBindPending: no report yet in this hub session (again when a new hub session starts, not after
+///                 a link loss with the same hub); requests wait meanwhile.
+///   kBindOk:      every hub channel bound.
+///   kBindFailed:  at least one did not: index is the first (1..N, the order of the remote*()
+///                 declarations) and code why (2 no such name, 3 another type, 5 not writable or
+///                 callable, 6 not readable). The others work; requests on that one fail with a NAK.
+/// index and code mean something only in kBindFailed. A later report (the hub's channels changed)
+/// replaces the status.
+///   if (hub.hubBinding().state == hubwire::kBindFailed) showError(hub.hubBinding().index);
 enum BindState : uint8_t { kBindPending = 0, kBindOk = 1, kBindFailed = 2 };
 struct BindStatus {
   uint8_t state;  // BindState: pending until this hub session's report arrives
@@ -27,14 +36,22 @@ struct BindStatus {
   bool ok() const { return state == kBindOk; }
 };
 
-/// The hub as its heartbeats describe it, as the hub sees the device's.
+/// The hub's heartbeats as the board heard them (PROTOCOL.md 10.6): beats heard since begin() while
+/// linked (wraps, never reset), and the latest one's interval and the hub's receiver error counters
+/// (the board's frames the hub dropped). Zero until the first; kept across a link loss.
+///   if (hub.hubHealth().crc > 10) slowDown();
 struct HubHealth {
   uint16_t beats;     // hub heartbeats heard since begin()
   uint16_t sinceMs;   // the latest one's "ms since previous": the hub's actual interval
   uint16_t crc, overflow, dropped;  // the hub's receiver error counters, as of that heartbeat
 };
 
-/// A failure callback's code when the hub never answered (the others are the hub's NAK codes).
+/// The code a fail callback gets when the hub never answered: HUBWIRE_HUB_TRIES sends
+/// HUBWIRE_HUB_RETRY_MS apart, or none possible (no link, no bind report) within as long after the
+/// request was queued. A write or call may or may not have been applied. Never a wire code
+/// (PROTOCOL.md 5 keeps 240..255 local). Every other code is the hub's NAK, or BAD_LENGTH (3) /
+/// BAD_VALUE (11) for an answer the board could not take (PROTOCOL.md 10.2).
+///   void failed(uint8_t code) { if (code == hubwire::kHubTimeout) retryLater(); }
 const uint8_t kHubTimeout = 0xF0;
 
 typedef void (*HubDone)();

@@ -161,10 +161,12 @@ class Session : private SessionState {
   ///   uint16_t bad = session.counters().crc;
   const LinkCounters& counters() const { return rx_.counters; }
 
-  // ---- the hub's own channels, declared with remote(), remoteAction(), remoteEvent() (hub_link.h).
-  // None of these waits: each queues (false when the queue of HUBWIRE_HUB_QUEUE is full, or the
-  // variable or action is not declared so), is sent once the hub has bound the declarations, and
-  // ends in exactly one of its callbacks: done, or fail with a NAK code or kHubTimeout. ----
+  // ---- the hub's own channels, declared with remote(), remoteAction(), remoteEvent() (hub_link.h,
+  // PROTOCOL.md 10). None of these waits: each queues and returns true, or false when it cannot (not
+  // begun, the variable or action not declared for that use, or HUBWIRE_HUB_QUEUE requests waiting
+  // already). A queued request is sent once the hub's bind report has arrived, one at a time, and
+  // ends in exactly one of its callbacks: done, or fail(code) with the hub's NAK code (2, 3, 4, 5, 6,
+  // 9, 11, 12), BAD_LENGTH / BAD_VALUE for an answer the board could not take, or kHubTimeout. ----
 
   /// Asks the hub for a value declared with remote(); its answer lands in var, then done runs.
   ///   hub.request(setpoint, setpointArrived, setpointFailed);
