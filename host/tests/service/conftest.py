@@ -103,7 +103,7 @@ def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> It
     sock = str(tmp_path / "run" / "hubwire.sock")
     cache = tmp_path / "cache"
     cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
+    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache), HUBWIRE_STATE_DIR=str(tmp_path / "state"),
                PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
     env.pop("HUBWIRE_NO_SERVICE", None)
     monkeypatch.setenv("HUBWIRE_SOCKET", sock)
