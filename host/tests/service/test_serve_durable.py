@@ -176,3 +176,35 @@ def test_hub_events_survive_kill9_of_the_service(serve: Serve, soak: Emulator) -
     assert counts["tick_twice"] <= 1, counts
     assert counts["ticks"] == n + counts["tick_twice"], counts
     c.close()
+
+
+def test_notify_when_full_is_refused_and_the_kept_ones_all_arrive(serve: Serve, soak: Emulator) -> None:
+    """A board that answers nothing (stopped): the service keeps HUB_EVENT_LIMIT hub events for it and
+    refuses the next one; killed and restarted meanwhile, it delivers every one it accepted."""
+    from hubwire.service.store import HUB_EVENT_LIMIT
+
+    c = ready_client(serve, "soak")
+    c.request("notify", board="soak", channel="tick", value=1)  # the board is bound: hub events flow
+    wait_for(lambda: c.request("read", board="soak", channel="tick_last")["value"] == 1, 30, "tick 1")
+    soak.pause()
+    rids = [c.send("notify", board="soak", channel="tick", value=t) for t in range(2, HUB_EVENT_LIMIT + 3)]
+    answers = [c.answer(rid) for rid in rids]
+    ok = [a for a in answers if a["ok"]]
+    refused = [a for a in answers if not a["ok"]]
+    assert len(ok) == HUB_EVENT_LIMIT and answers[:HUB_EVENT_LIMIT] == ok, "the first ones are kept"
+    assert len(refused) == 1 and "wait for" in refused[0]["message"], refused
+    kill9(serve)
+    c.close()
+    serve.start()
+    soak.resume()
+    c = ready_client(serve, "soak")
+    last = HUB_EVENT_LIMIT + 1
+
+    def read(ch: str) -> int:
+        return int(c.request("read", board="soak", channel=ch)["value"])
+    wait_for(lambda: read("tick_last") == last, 120, f"tick {last} applied")
+    counts = {ch: read(ch) for ch in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")}
+    print(f"hub events when full: {len(ok) + 1} accepted, 1 refused, device counts {counts}")
+    assert counts["tick_gaps"] == 0 and counts["tick_twice"] <= 1, counts
+    assert counts["ticks"] == last + counts["tick_twice"], counts
+    c.close()
