@@ -9,6 +9,7 @@ import signal
 import sys
 from typing import Any, Awaitable, Callable, List, Optional, Sequence, Tuple
 
+from ..errors import HubwireError
 from .fleet import Fleet
 from .protocol import default_serve_socket
 from .server import Server
@@ -128,7 +129,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
     clients = [dashboard(args)] if args.http is not None else []
     from .store import Store, state_dir
 
-    store = Store(state_dir(args.state))
+    try:
+        store = Store(state_dir(args.state))
+    except (OSError, HubwireError) as e:
+        raise SystemExit(f"hubwire serve: {e}") from None
     fleet = Fleet(ports=args.ports, globs=args.watch, usb=not args.no_usb, connect_timeout=args.timeout,
                   poll_interval=args.poll, store=store)
 

@@ -18,6 +18,7 @@ Durability: WAL with ``synchronous=NORMAL``: a committed row survives the proces
 """
 from __future__ import annotations
 
+import fcntl
 import os
 import sqlite3
 import time
@@ -103,6 +104,14 @@ class Store:
         self.clock = clock
         old = os.umask(0o077)
         try:
+            # one service per state directory: two would both send the same kept hub events
+            self._lock = os.open(os.path.join(directory, "lock"), os.O_RDWR | os.O_CREAT, 0o600)
+            try:
+                fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                os.close(self._lock)
+                raise HubwireError(f"another hubwire serve uses the state directory {directory}: give each "
+                                   "service its own (--state DIR)") from None
             self.db = sqlite3.connect(self.path, isolation_level=None, check_same_thread=False)
         finally:
             os.umask(old)
@@ -114,6 +123,7 @@ class Store:
 
     def close(self) -> None:
         self.db.close()
+        os.close(self._lock)  # (the lock goes with it)
 
     # ----------------------------------------------------------------------------- boards
 

@@ -32,7 +32,8 @@ class Serve:
         self.boards_dir = boards_dir
         self.args = list(args)  # more `hubwire serve` options, e.g. ["--mqtt", "127.0.0.1:1883"]
         self.socket = socket
-        self.env = env
+        # what the service keeps across restarts: next to its log, never the user's own state
+        self.env = env if "HUBWIRE_STATE_DIR" in env else dict(env, HUBWIRE_STATE_DIR=os.path.splitext(log)[0] + "-state")
         self.log = log
         self.proc: Optional[subprocess.Popen] = None
 
@@ -103,7 +104,7 @@ def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> It
     sock = str(tmp_path / "run" / "hubwire.sock")
     cache = tmp_path / "cache"
     cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache), HUBWIRE_STATE_DIR=str(tmp_path / "state"),
+    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
                PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
     env.pop("HUBWIRE_NO_SERVICE", None)
     monkeypatch.setenv("HUBWIRE_SOCKET", sock)

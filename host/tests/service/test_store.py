@@ -7,6 +7,8 @@ from typing import Any, List
 
 import pytest
 
+from hubwire.errors import HubwireError
+
 from hubwire.service.store import Store, StoredEvent, StoreFull, state_dir
 
 
@@ -28,6 +30,14 @@ def test_state_dir_is_private(tmp_path: Any) -> None:
     os.chmod(open_dir, 0o755)
     Store(str(open_dir)).close()
     assert stat.S_IMODE(os.stat(open_dir).st_mode) == 0o700, "an existing directory is made 0700"
+
+
+def test_one_service_per_state_dir(tmp_path: Any) -> None:
+    s = Store(str(tmp_path))
+    with pytest.raises(HubwireError, match="another hubwire serve"):
+        Store(str(tmp_path))
+    s.close()
+    Store(str(tmp_path)).close()  # free again once the first one closed
 
 
 def test_state_dir_default(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -6,6 +6,7 @@ import os
 import shlex
 
 from hubwire.service.protocol import SYSTEM_SOCKET
+from hubwire.service.store import SYSTEM_STATE_DIR
 
 UNIT = os.path.join(os.path.dirname(__file__), "..", "..", "hubwire", "service", "hubwire.service")
 
@@ -22,3 +23,14 @@ def test_unit_serves_on_the_socket_clients_try_and_caches_in_its_cache_directory
     assert SYSTEM_SOCKET == f"/run/{svc['RuntimeDirectory']}/hubwire.sock"
     assert svc["Environment"] == f"HUBWIRE_CACHE_DIR=/var/cache/{svc['CacheDirectory']}"
     assert svc["Group"] == "dialout" and unit["Install"]["WantedBy"] == "multi-user.target"
+
+
+def test_unit_keeps_its_state_in_a_private_state_directory() -> None:
+    unit = configparser.ConfigParser(strict=False, interpolation=None)
+    unit.optionxform = str  # type: ignore[assignment,method-assign]
+    with open(UNIT) as fh:
+        unit.read_file(fh)
+    svc = unit["Service"]
+    argv = shlex.split(svc["ExecStart"])
+    assert argv[argv.index("--state") + 1] == f"/var/lib/{svc['StateDirectory']}" == SYSTEM_STATE_DIR
+    assert svc["StateDirectoryMode"] == "0700"
