@@ -18,12 +18,13 @@ Durability: WAL with ``synchronous=NORMAL``: a committed row survives the proces
 """
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import os
 import sqlite3
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from ..errors import HubwireError
 from ..session.hub_channels import HUB_EVENT_QUEUE_LIMIT
@@ -121,6 +122,17 @@ class Store:
         #: live listeners per board: called with each new event once it is stored
         self._listeners: Dict[str, List[Callable[[StoredEvent], None]]] = {}
 
+    @contextlib.contextmanager
+    def _txn(self) -> Iterator[None]:
+        """One transaction: all its statements on disk, or none (autocommit mode otherwise)."""
+        self.db.execute("BEGIN IMMEDIATE")
+        try:
+            yield
+        except BaseException:
+            self.db.execute("ROLLBACK")
+            raise
+        self.db.execute("COMMIT")
+
     def close(self) -> None:
         self.db.close()
         os.close(self._lock)  # (the lock goes with it)
@@ -149,7 +161,7 @@ class Store:
 
     def hub_add(self, key: str, name: str, payload: bytes) -> int:
         """Keep a hub event for ``key`` until :meth:`hub_done`; its row id. StoreFull at the limit."""
-        with self.db:
+        with self._txn():
             (n,) = self.db.execute("SELECT COUNT(*) FROM hub_events WHERE board=?", (key,)).fetchone()
             if n >= self.hub_limit:
                 raise StoreFull(f"{self.hub_limit} hub events wait for {key} already")
@@ -174,7 +186,7 @@ class Store:
         None when it is the device's retry of the last event stored (same nonce, seq, name, bytes):
         the service stored it and was stopped before acknowledging it."""
         now = self.clock()
-        with self.db:
+        with self._txn():
             last, lnonce, lseq = self._board(key)
             if nonce is not None and lnonce == nonce and lseq == seq:
                 prev = self.db.execute("SELECT name, raw FROM events WHERE board=? AND id=?", (key, last)).fetchone()

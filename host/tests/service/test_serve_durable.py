@@ -138,7 +138,7 @@ def test_device_events_survive_kill9_of_the_service(serve: Serve, soak: Emulator
         sub += 1
         r = c.request("events", board="soak", names=["bumper"], sub=sub, after=last)
         assert r["ok"], r
-        assert r.get("missed", 0) == 0
+        assert r.get("missed", 0) == 0 and not r.get("reset"), (last, r, serve.log_text()[-3000:])
     deadline = time.monotonic() + 30
     while len(c.events) < expected and time.monotonic() < deadline:
         c.drain(min(deadline, time.monotonic() + 1))
@@ -146,7 +146,8 @@ def test_device_events_survive_kill9_of_the_service(serve: Serve, soak: Emulator
     ids = [e.get("id") for e in c.events]
     print(f"device events: {expected} sent by the board, {len(c.events)} received, "
           f"{len(ids) - len(set(ids))} ids twice")
-    assert len(c.events) == expected, f"{expected} events sent, {len(c.events)} received"
+    assert len(c.events) == expected, (f"{expected} events sent, {len(c.events)} received: ids {ids}",
+                                       serve.log_text()[-3000:])
     assert ids == list(range(ids[0], ids[0] + len(ids))), "event ids: each once, in order"
     c.close()
 
