@@ -305,10 +305,10 @@ class Fleet:
         board.state = dev.state
         self._descriptors[board.key] = dev.descriptor
         self._by_port[real] = board
-        # the service always listens, so an event nobody else hears is counted, not kept for the
-        # next client (who sees the events from its subscription on)
+        # first: the events that came before it are stored (kept hub events go out before new ones)
+        durable.attach(self.store, board.key, dev)
+        # the service always listens, so an event nobody else hears is counted (and kept by the store)
         dev.on("*", lambda _ev, b=board: setattr(b, "events", b.events + 1))
-        durable.attach(self.store, board.key, dev)  # stored hub events first; events stored as they come
         for kind in ("link_lost", "link_restored", "reconnect"):
             dev.on(kind, lambda *_a, b=board, d=dev, r=real: self._device_changed(b, d, r))
         log.info("hubwire serve: %s (%s) on %s", board.key, board_id or "no board id", info.path)

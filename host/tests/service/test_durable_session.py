@@ -104,3 +104,40 @@ def test_event_is_stored_before_it_is_acknowledged(soak: Emulator, tmp_path: Any
         await dev.close()
         store.close()
     asyncio.run(run())
+
+
+def test_events_waiting_on_the_board_when_the_service_starts_are_stored(soak: Emulator, tmp_path: Any,
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Events the board kept for the hub while no service ran arrive while the service adopts it
+    (asks its board id, slowly here): each one is stored, none taken by the service's own counting."""
+    from hubwire.aio import AsyncDevice
+    from hubwire.service.fleet import Fleet
+
+    board_id = AsyncDevice.board_id
+
+    async def slow_board_id(self: Any, *a: Any, **kw: Any) -> Any:
+        await asyncio.sleep(0.5)  # the board's retries come meanwhile
+        return await board_id(self, *a, **kw)
+    monkeypatch.setattr(AsyncDevice, "board_id", slow_board_id)
+
+    async def run() -> None:
+        dev = await connect(transport=SerialTransport(soak.link), timeout=10)
+        send = dev.core.link.send_frame
+        bumper = dev.channel("bumper").id
+        dev.core.link.send_frame = (  # type: ignore[method-assign]
+            lambda t, seq, id, payload=b"": None if (t == m.ACK and id == bumper) else send(t, seq, id, payload))
+        assert await dev.call("selftest", 4) == 4  # the board keeps all 4: none acknowledged
+        await dev.close()
+        store = Store(str(tmp_path / "state"))
+        fleet = Fleet(ports=[soak.link], usb=False, udev=False, store=store, cache_dir=str(tmp_path / "cache"))
+        await fleet.start()
+        try:
+            await until(lambda: any(b.key == "soak" and b.device for b in fleet.boards()), 15, "the board adopted")
+            await until(lambda: store.last_id("soak") >= 4, 10, "4 events stored")
+            await asyncio.sleep(0.3)
+            rows, _missed, last = store.events_after("soak", 0)
+            assert last == 4 and [e.raw for e in rows] == [b"\x01", b"\x00", b"\x01", b"\x00"]
+        finally:
+            await fleet.close()
+            store.close()
+    asyncio.run(run())
