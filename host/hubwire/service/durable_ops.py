@@ -7,7 +7,7 @@ import asyncio
 from typing import Any, Dict, List
 
 from ..cli_support import jsonable
-from ..errors import HubwireError
+from ..errors import HubwireError, LinkLost
 from .store import StoredEvent
 
 __all__ = ["notify", "events", "event_json"]
@@ -20,15 +20,23 @@ class _UnknownChannel(HubwireError, KeyError):
         return str(self.args[0]) if self.args else ""
 
 
-def notify(dev: Any, msg: Dict[str, Any]) -> Dict[str, Any]:
-    """Queue hub event ``channel`` for ``dev`` (``value``, or ``raw``: its payload in hex)."""
+def notify(fleet: Any, msg: Dict[str, Any]) -> Dict[str, Any]:
+    """Queue hub event ``channel`` for the board (``value``, or ``raw``: its payload in hex); with a
+    store, also while the board is unplugged (its next session sends it)."""
+    b = fleet.resolve(str(msg.get("board", "")))
     name = str(msg.get("channel"))
-    hc = dev.core.hub.channels.get(name)
-    if hc is None or not hc.is_event:
-        takes = sorted(h.name for h in dev.core.hub.channels if h.is_event)
-        raise _UnknownChannel(f"{dev.name} takes no hub event {name!r}; it takes: {', '.join(takes) or 'none'}")
-    value = hc.channel.codec.decode(bytes.fromhex(str(msg["raw"]))) if "raw" in msg else msg.get("value")
-    dev.notify(name, value)  # checked, queued and (with a store) on disk when this returns
+    desc = fleet.descriptor(b.key)
+    exp = next((c for c in desc.hub if c.name == name and "e" in c.access), None)
+    if exp is None:
+        takes = sorted(c.name for c in desc.hub if "e" in c.access)
+        raise _UnknownChannel(f"{desc.name} takes no hub event {name!r}; it takes: {', '.join(takes) or 'none'}")
+    value = exp.codec.decode(bytes.fromhex(str(msg["raw"]))) if "raw" in msg else msg.get("value")
+    if b.device is not None:
+        b.device.notify(name, value)  # checked, queued and (with a store) on disk when this returns
+    elif fleet.store is not None:
+        fleet.store.hub_add(b.key, name, exp.codec.encode(exp.check(value)))
+    else:
+        raise LinkLost(f"board {b.key} is unplugged (last seen on {b.last_port})")
     return {}
 
 

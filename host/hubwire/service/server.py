@@ -238,7 +238,7 @@ class _Client:
 
     async def op_notify(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         """A hub event for the board (PROTOCOL.md 10.3): answered once queued (and stored)."""
-        return durable_ops.notify(self._device(msg), msg)
+        return durable_ops.notify(self.fleet, msg)
 
     async def op_events(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         if self.fleet.store is not None:  # events with ids, and a resume point (``after``)

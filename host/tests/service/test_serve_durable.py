@@ -209,3 +209,23 @@ def test_notify_when_full_is_refused_and_the_kept_ones_all_arrive(serve: Serve, 
     assert counts["tick_gaps"] == 0 and counts["tick_twice"] <= 1, counts
     assert counts["ticks"] == last + counts["tick_twice"], counts
     c.close()
+
+
+def test_notify_while_unplugged_reaches_the_board_when_it_comes_back(serve: Serve, soak: Emulator) -> None:
+    c = ready_client(serve, "soak")
+    soak.stop()
+    wait_for(lambda: any(b["key"] == "soak" and b["state"] == "unplugged" for b in c.request("list")["boards"]),
+             30, "soak unplugged")
+    for t in (1, 2, 3):
+        a = c.request("notify", board="soak", channel="tick", value=t)
+        assert a["ok"], a
+    bad = c.request("notify", board="soak", channel="tick", value=-1)
+    assert not bad["ok"] and bad["error"] == "InvalidValue", bad
+    soak.start()
+
+    def read(ch: str) -> int:
+        r = c.request("read", board="soak", channel=ch)
+        return int(r["value"]) if r["ok"] else -1
+    wait_for(lambda: read("tick_last") == 3, 30, "tick 3 applied")
+    assert [read(ch) for ch in ("ticks", "tick_first", "tick_twice", "tick_gaps")] == [3, 1, 0, 0]
+    c.close()
