@@ -229,3 +229,29 @@ def test_notify_while_unplugged_reaches_the_board_when_it_comes_back(serve: Serv
     wait_for(lambda: read("tick_last") == 3, 30, "tick 3 applied")
     assert [read(ch) for ch in ("ticks", "tick_first", "tick_twice", "tick_gaps")] == [3, 1, 0, 0]
     c.close()
+
+
+def test_events_resume_points(serve: Serve, soak: Emulator) -> None:
+    """``last``, ``after``, ``reset`` and unknown names, as docs/SERVICE.md describes them."""
+    c = ready_client(serve, "soak")
+    a = c.request("events", board="soak", names=[], sub=1, after=0)
+    assert a["ok"] and a["last"] == 0 and a["missed"] == 0, a
+    assert c.request("call", board="soak", channel="selftest", arg=2)["value"] == 2
+    wait_for(lambda: c.drain(time.monotonic() + 0.1) or len(c.events) == 2, 10, "2 events")
+    assert [(e["id"], e["value"]) for e in c.events] == [(1, True), (2, False)]
+    c.close()
+    c = Raw(serve.socket)
+    a = c.request("events", board="soak", names=["bumper"], sub=1, after=1)
+    assert a["ok"] and a["last"] == 2 and a["missed"] == 0 and not a.get("reset"), a
+    assert [e["id"] for e in c.events] == [2], "only what came after id 1"
+    b = c.request("events", board="soak", names=[], sub=2)
+    assert b["ok"] and b["last"] == 2 and "missed" not in b and [e["id"] for e in c.events] == [2], \
+        "without after: from the next event on"
+    r = c.request("events", board="soak", names=[], sub=3, after=99)
+    assert r["ok"] and r["reset"] is True and [e["id"] for e in c.events] == [2, 1, 2], \
+        "after beyond every id: the store was wiped, everything kept is sent"
+    bad = c.request("events", board="soak", names=["nope"], sub=4)
+    assert not bad["ok"] and bad["error"] == "UnknownChannel", bad
+    bad = c.request("events", board="soak", names=[], sub=5, after="x")
+    assert not bad["ok"], bad
+    c.close()
