@@ -146,3 +146,33 @@ def test_boards_bounded_idlest_forgotten(tmp_path: Any) -> None:
     with pytest.raises(StoreFull):
         s.hub_add("d", "tick", b"\x01")  # every board remembered has hub events waiting
     assert s.stats()["boards"] == 2
+
+
+def test_an_event_is_stored_whole_or_not_at_all(tmp_path: Any) -> None:
+    """Stopped between writing an event and moving the board's last id on, the store keeps neither:
+    the next event takes that id (rather than clashing with a half-written one for ever)."""
+    import sqlite3
+
+    s = Store(str(tmp_path))
+    s.event_add("rover", "e", b"\x01", 1, 1)
+    real = s.db
+
+    class Dies:
+        def execute(self, sql: str, *args: Any) -> Any:
+            if sql.startswith("UPDATE boards"):
+                raise sqlite3.OperationalError("the process died here")
+            return real.execute(sql, *args)
+
+        def __enter__(self) -> Any:
+            return real.__enter__()
+
+        def __exit__(self, *exc: Any) -> Any:
+            return real.__exit__(*exc)
+    s.db = Dies()  # type: ignore[assignment]
+    with pytest.raises(sqlite3.OperationalError):
+        s.event_add("rover", "e", b"\x02", 2, 1)
+    s.db = real
+    ev = s.event_add("rover", "e", b"\x03", 3, 1)
+    assert ev is not None and ev.id == 2
+    rows, _missed, last = s.events_after("rover", 0)
+    assert [(e.id, e.raw) for e in rows] == [(1, b"\x01"), (2, b"\x03")] and last == 2
