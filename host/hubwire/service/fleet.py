@@ -28,6 +28,7 @@ from ..aio import AsyncDevice, connect
 from ..descriptor import Descriptor
 from ..errors import HubwireError, LinkLost
 from ..transport import SerialTransport
+from . import durable
 from .ports import PortInfo, PortScanner
 from .topics import board_key
 
@@ -105,7 +106,7 @@ class Fleet:
     def __init__(self, *, ports: Optional[List[str]] = None, globs: Optional[List[str]] = None,
                  usb: bool = True, connect_timeout: float = 5.0, cache_dir: Any = None,
                  poll_interval: float = 0.5, lister: Optional[Callable[[], List[Any]]] = None,
-                 udev: bool = True) -> None:
+                 udev: bool = True, store: Any = None) -> None:
         self.scanner = PortScanner(ports or [], globs or [], usb=usb, lister=lister)
         self.connect_timeout = connect_timeout
         self.cache_dir = cache_dir
@@ -122,6 +123,8 @@ class Fleet:
         self._closed = False
         #: each board's last descriptor (kept while it is unplugged)
         self._descriptors: Dict[str, Descriptor] = {}
+        #: what survives a restart (a :class:`~.store.Store`), or None
+        self.store = store
 
     # --------------------------------------------------------------------------- the FLEET.md API
 
@@ -305,8 +308,9 @@ class Fleet:
         board.state = dev.state
         self._descriptors[board.key] = dev.descriptor
         self._by_port[real] = board
-        # the service always listens, so an event nobody else hears is counted, not kept for the
-        # next client (who sees the events from its subscription on)
+        # first: the events that came before it are stored (kept hub events go out before new ones)
+        durable.attach(self.store, board.key, dev)
+        # the service always listens, so an event nobody else hears is counted (and kept by the store)
         dev.on("*", lambda _ev, b=board: setattr(b, "events", b.events + 1))
         for kind in ("link_lost", "link_restored", "reconnect"):
             dev.on(kind, lambda *_a, b=board, d=dev, r=real: self._device_changed(b, d, r))

@@ -9,6 +9,7 @@ import signal
 import sys
 from typing import Any, Awaitable, Callable, List, Optional, Sequence, Tuple
 
+from ..errors import HubwireError
 from .fleet import Fleet
 from .protocol import default_serve_socket
 from .server import Server
@@ -30,6 +31,10 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
                    help="serve every port matching this glob as it appears ('/dev/serial/by-id/*', '/tmp/boards/*')")
     s.add_argument("--no-usb", action="store_true", help="do not look for USB boards (only PORTs and --watch)")
     s.add_argument("--socket", default=None, help=f"the socket clients use (default {default_serve_socket()})")
+    s.add_argument("--state", default=None, metavar="DIR",
+                   help="directory (0700) for what survives a restart: hub events not yet delivered, the recent "
+                        "events of each board (default $HUBWIRE_STATE_DIR, else /var/lib/hubwire as root, else "
+                        "$XDG_STATE_HOME/hubwire)")
     s.add_argument("--timeout", type=float, default=5.0, help="connect deadline per board in seconds (default 5)")
     s.add_argument("--poll", type=float, default=0.5, help="seconds between port scans (default 0.5)")
     s.add_argument("--mqtt", metavar="HOST:PORT", default=None,
@@ -125,8 +130,14 @@ def cmd_serve(args: argparse.Namespace) -> int:
     sock = args.socket or default_serve_socket()
     bridge = mqtt_bridge() if args.mqtt else None
     clients = [dashboard(args)] if args.http is not None else []
+    from .store import Store, state_dir
+
+    try:
+        store = Store(state_dir(args.state))
+    except (OSError, HubwireError) as e:
+        raise SystemExit(f"hubwire serve: {e}") from None
     fleet = Fleet(ports=args.ports, globs=args.watch, usb=not args.no_usb, connect_timeout=args.timeout,
-                  poll_interval=args.poll)
+                  poll_interval=args.poll, store=store)
 
     async def main() -> None:
         task = asyncio.current_task()
@@ -140,6 +151,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
         asyncio.run(main())
     except asyncio.CancelledError:
         pass
+    finally:
+        store.close()
     return 0
 
 

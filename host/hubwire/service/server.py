@@ -16,6 +16,7 @@ from typing import Any, Awaitable, Callable, Dict, Optional
 from .. import __version__
 from ..cli_support import jsonable
 from ..errors import HubwireError, LinkLost, StreamEnded
+from . import durable_ops
 from .fleet import Fleet
 from .protocol import MAX_LINE, PROTOCOL, board_json, encode, error_json
 from .sockdir import ensure_dir
@@ -235,7 +236,13 @@ class _Client:
         finally:
             await st.aclose()
 
+    async def op_notify(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        """A hub event for the board (PROTOCOL.md 10.3): answered once queued (and stored)."""
+        return durable_ops.notify(self.fleet, msg)
+
     async def op_events(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        if self.fleet.store is not None:  # events with ids, and a resume point (``after``)
+            return durable_ops.events(self, msg)
         dev = self._device(msg)
         key = self.fleet.resolve(str(msg.get("board"))).key
         names = [str(n) for n in msg.get("names") or []]

@@ -111,7 +111,14 @@ class Events:
             # callbacks lag behind: not acked, so the device keeps it and retries (flow control)
             core.stats.events_deferred += 1
             return
-        core.link.send_frame(m.ACK, f.seq, f.id)
+        try:
+            self._take(f, now, desc)
+        finally:
+            # acknowledged once handed on: a sink that stores events (hubwire serve) has it on disk
+            core.link.send_frame(m.ACK, f.seq, f.id)
+
+    def _take(self, f: Frame, now: float, desc: Any) -> None:
+        core = self.core
         if self.last_seq == f.seq:
             core.stats.duplicate_events += 1
             return

@@ -9,6 +9,9 @@ the bind report (``C`` id 0) and the queue of hub events (``!``) to the device.
   every retry interval while linked, without limit, with the same seq; the queue survives link
   loss and device reboots. Sent only once the device acked the bind report in this pairing of
   device and hub sessions, and only for names it listed with access ``e``.
+- Persistence (optional): a ``keeper`` with ``add(name, payload) -> token`` (called as notify()
+  queues an event; it may refuse by raising) and ``done(token)`` (the device answered it); events a
+  keeper kept from an earlier session go back in the queue with :meth:`HubSide.restore`.
 """
 from __future__ import annotations
 
@@ -40,13 +43,14 @@ BIND_PAUSE = 0.5
 
 
 class _Queued:
-    __slots__ = ("name", "payload", "seq", "id")
+    __slots__ = ("name", "payload", "seq", "id", "token")
 
-    def __init__(self, name: str, payload: bytes) -> None:
+    def __init__(self, name: str, payload: bytes, token: Any = None) -> None:
         self.name = name
         self.payload = payload
         self.seq: Optional[int] = None  # drawn at the first send, kept for every retry
         self.id = 0
+        self.token = token  # the keeper's handle, if any
 
 
 class HubSide:
@@ -69,6 +73,8 @@ class HubSide:
         self._bind_wanted = False
         self._head_out = False  # the head event is sent and unanswered
         self._timer: Optional[asyncio.TimerHandle] = None
+        #: optional persistence of the queue (see the module docs)
+        self.keeper: Any = None
         #: answers the device's own R / C / J
         self.answers = HubAnswers(core, channels)
         channels.add_listener(self)
@@ -177,7 +183,7 @@ class HubSide:
             ev = self.queue[0]
             exp = next((c for c in desc.hub if c.name == ev.name), None)
             if exp is None or "e" not in exp.access:
-                self.queue.popleft()
+                self._done(self.queue.popleft())
                 self.core.stats.hub_events_skipped += 1
                 log.warning("hubwire: %s takes no event %s: not sent", desc.name, clip(ev.name))
                 continue
@@ -232,6 +238,7 @@ class HubSide:
                 self._kick_in_a_while()
                 return True
             ev = self.queue.popleft()
+            self._done(ev)
             if not self.queue:
                 self.core.wake()  # whoever waits for the queue to empty (wait_notified)
             if f.type == m.ACK:
@@ -285,8 +292,20 @@ class HubSide:
         with self._lock:
             if len(self.queue) >= HUB_EVENT_QUEUE_LIMIT:
                 raise HubwireError(f"{HUB_EVENT_QUEUE_LIMIT} hub events wait for the device already")
-            self.queue.append(_Queued(name, payload))
+            token = None if self.keeper is None else self.keeper.add(name, payload)
+            self.queue.append(_Queued(name, payload, token))
         self.loop.call_soon_threadsafe(self.kick)
+
+    def restore(self, kept: List[Tuple[Any, str, bytes]]) -> None:
+        """Queue (token, name, payload) events a keeper kept from an earlier session, ahead of any
+        new one (the keeper has them already)."""
+        with self._lock:
+            self.queue.extendleft(_Queued(n, p, t) for t, n, p in reversed(kept))
+        self.loop.call_soon_threadsafe(self.kick)
+
+    def _done(self, ev: _Queued) -> None:
+        if self.keeper is not None and ev.token is not None:
+            self.keeper.done(ev.token)
 
 
 def mismatch(exp: Channel, hc: Optional[HubChannel], code: int, device: str) -> str:

@@ -32,7 +32,8 @@ class Serve:
         self.boards_dir = boards_dir
         self.args = list(args)  # more `hubwire serve` options, e.g. ["--mqtt", "127.0.0.1:1883"]
         self.socket = socket
-        self.env = env
+        # what the service keeps across restarts: next to its log, never the user's own state
+        self.env = env if "HUBWIRE_STATE_DIR" in env else dict(env, HUBWIRE_STATE_DIR=os.path.splitext(log)[0] + "-state")
         self.log = log
         self.proc: Optional[subprocess.Popen] = None
 

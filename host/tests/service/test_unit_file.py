@@ -6,6 +6,7 @@ import os
 import shlex
 
 from hubwire.service.protocol import SYSTEM_SOCKET
+from hubwire.service.store import SYSTEM_STATE_DIR
 
 UNIT = os.path.join(os.path.dirname(__file__), "..", "..", "hubwire", "service", "hubwire.service")
 
@@ -33,3 +34,14 @@ def test_unit_makes_the_socket_directory_for_its_group_only() -> None:
     svc = unit["Service"]
     assert int(svc["RuntimeDirectoryMode"], 8) == 0o750
     assert svc["Group"] and svc["User"] != "root"
+
+
+def test_unit_keeps_its_state_in_a_private_state_directory() -> None:
+    unit = configparser.ConfigParser(strict=False, interpolation=None)
+    unit.optionxform = str  # type: ignore[assignment,method-assign]
+    with open(UNIT) as fh:
+        unit.read_file(fh)
+    svc = unit["Service"]
+    argv = shlex.split(svc["ExecStart"])
+    assert argv[argv.index("--state") + 1] == f"/var/lib/{svc['StateDirectory']}" == SYSTEM_STATE_DIR
+    assert svc["StateDirectoryMode"] == "0700"
