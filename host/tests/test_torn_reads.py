@@ -54,3 +54,33 @@ def test_a_retried_large_read_of_a_changing_value_is_never_torn(tmp_path: pathli
         value = {"seq": got.seq, "samples": list(got.samples)}
         assert len(fake.tries) >= 2
         assert value in (snapshot(1), snapshot(2)), f"torn: seq {value['seq']}, samples {value['samples'][:14]}"
+
+
+def _fragments(seq: int, payload: bytes) -> List[Frame]:
+    from hubwire.wire.frame import FrameDecoder
+
+    d = FrameDecoder()
+    return list(d.feed(encode_message(m.RESPONSE, seq, 2, payload, 32)))
+
+
+def test_a_reassembly_is_abandoned_for_a_retired_try_and_after_a_long_gap() -> None:
+    from types import SimpleNamespace
+
+    from hubwire.session.fragments import FRAGMENT_GAP, Reassembler
+
+    counters = SimpleNamespace(dropped=0)
+    r = Reassembler(counters)
+    old, new = bytes(range(100)), bytes(range(100, 200))
+    a, b = _fragments(7, old), _fragments(7, new)
+    assert r._feed(a[0], 10.0) is None
+    r.abandon(7, 2)  # the try was given up: its second half, whoever sends it, completes nothing
+    assert all(r._feed(f, 10.1) is None for f in b[1:])
+    # a fragment long after the one before it does not continue it (the seq may have come round)
+    assert r._feed(a[0], 20.0) is None
+    assert r._feed(b[1], 20.0 + FRAGMENT_GAP + 0.1) is None
+    assert counters.dropped >= len(b) - 1 + 1
+    # on time and in order: whole
+    for f in a[:-1]:
+        assert r._feed(f, 30.0) is None
+    whole = r._feed(a[-1], 30.0 + FRAGMENT_GAP / 2)
+    assert whole is not None and whole.payload == old

@@ -139,3 +139,33 @@ def test_a_write_when_every_seq_may_be_remembered_reads_first_and_is_applied(soa
     assert tx.rules.controls and len(tx.rules.controls) == 1  # the write's own seq, answered
     assert (dev.token, dev.tokens_applied) == (7, 1)
     assert dev.session.stats.unmatched_answers == unmatched
+
+
+def test_asyncio_reads_beyond_max_in_flight_wait_their_turn(tmp_path: Any) -> None:
+    import asyncio
+
+    import hubwire.aio
+
+    link = str(tmp_path / "soak")
+    emu = start_emulator(_binary(), link)
+
+    async def main() -> Any:
+        async with hubwire.aio.connect(link, cache_dir=False, timeout=10, max_in_flight=4) as dev:
+            tx = dev._core.tx
+            peak = 0
+            register = tx.try_register
+
+            def counting(*a: Any, **kw: Any) -> Any:
+                nonlocal peak
+                p = register(*a, **kw)
+                peak = max(peak, tx.slots.used)
+                return p
+
+            tx.try_register = counting
+            values = await asyncio.gather(*(dev.read("uptime") for _ in range(40)))
+            return len(values), peak, tx.slots.used, len(tx.slots.waiting)
+
+    try:
+        assert asyncio.run(main()) == (40, 4, 0, 0)
+    finally:
+        stop_process(emu)
