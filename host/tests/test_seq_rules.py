@@ -305,8 +305,10 @@ def test_a_retried_read_takes_a_new_seq_and_a_late_answer_to_the_old_one_is_igno
     c = tx.try_register(m.CONTROL, 3, b"", threaded=True, slot=True)
     assert c is not None
     tx.transmit(c)
+    first = c.seq
     tx.retry(c)
-    assert c.tries == 2 and c.seq == c.seq  # a control keeps its seq: the device's duplicate memory
+    assert c.tries == 2 and c.seq == first  # a control keeps its seq: the device's duplicate memory
+    assert tx.core.link.out[-1] == tx.core.link.out[-2] == bytes((m.CONTROL, first, 3))
 
 
 def test_threads_beyond_the_limit_wait_asleep_and_go_in_order() -> None:

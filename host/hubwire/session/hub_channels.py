@@ -73,6 +73,7 @@ class HubSide:
         self._bind_wanted = False
         self._head_out = False  # the head event is sent and unanswered
         self._timer: Optional[asyncio.TimerHandle] = None
+        self._probe: Optional["asyncio.Task[None]"] = None  # a read that lets controls be numbered again
         #: answers the device's own R / C / J
         self.answers = HubAnswers(core, channels)
         channels.add_listener(self)
@@ -107,6 +108,8 @@ class HubSide:
         self.channels.remove_listener(self)
         if self._bind_later is not None:
             self._bind_later.cancel()
+        if self._probe is not None:
+            self._probe.cancel()
         self.link_down()
 
     # ------------------------------------------------------------------------- the pump
@@ -149,10 +152,11 @@ class HubSide:
                 log.error("hubwire: %d hub channels do not fit the bind report %s accepts", len(desc.hub), desc.name)
                 return
             seq = core.tx.hold(m.CONTROL, 0)
-            if seq is None:  # every seq in use or remembered (not with the transactions bounded)
+            if seq is None:  # the device may remember every seq for a control: a read ends that
                 self._bind_wanted = True
                 core.tx.release_control()
-                self._kick_in_a_while()
+                if self._probe is None:
+                    self._probe = self.loop.create_task(self._read_board_id())
                 return
             self._bind, self._bind_sends = (seq, payload), 0
             core.stats.binds_sent += 1
@@ -164,6 +168,15 @@ class HubSide:
         if self.bound_key == self._key() and not self._head_out:
             self._send_head(desc)
         self._arm()
+
+    async def _read_board_id(self) -> None:
+        try:
+            await self.core.tx.transact_probe(self.core.retry_timeout, "board id")
+        except HubwireError:
+            pass  # the link is down or the device deaf: kicked again when it is back
+        finally:
+            self._probe = None
+        self.kick()
 
     def _send_bind(self) -> None:
         assert self._bind is not None

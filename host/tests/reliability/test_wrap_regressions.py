@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 from typing import Any, Iterator
 
 import pytest
@@ -169,3 +170,23 @@ def test_asyncio_reads_beyond_max_in_flight_wait_their_turn(tmp_path: Any) -> No
         assert asyncio.run(main()) == (40, 4, 0, 0)
     finally:
         stop_process(emu)
+
+
+def test_a_bind_report_when_every_seq_may_be_remembered_reads_first_and_is_acked(soak: Any) -> None:
+    dev = soak
+    core = dev.session.core
+    tx = core.tx
+    sent, delivered = core.stats.binds_sent, core.stats.hub_events_delivered
+    with tx.lock:
+        tx.rules.controls = {s: tx.rules.draws for s in range(256)}
+    core.loop.call_soon_threadsafe(core.hub.rebind)
+    end = time.monotonic() + 20
+    while (core.stats.binds_sent == sent or core.hub._bind is not None) and time.monotonic() < end:
+        time.sleep(0.05)
+    # sent once, and acked: the device remembers its seq, and no other
+    assert core.stats.binds_sent == sent + 1 and core.hub._bind is None
+    assert len(tx.rules.controls) == 1
+    dev.notify("tick", 5)
+    dev.wait_notified(20)
+    assert core.stats.hub_events_delivered == delivered + 1
+    assert (dev.ticks, dev.tick_last) == (1, 5)
