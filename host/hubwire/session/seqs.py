@@ -7,11 +7,14 @@ as long as no other hub ``R``/``C``/``J``/``S`` came after it, and the (seq, id)
 be taken for a retry: answered, not applied. The counter wraps every 256 messages of all kinds, so
 counting alone does not prevent it; :class:`SeqRules` skips:
 
-- for a ``C``: the seq of the last control answered and of every control since that ended without
-  an answer (the device may have applied any of them), until an answer to an ``R``, ``J`` or ``S``
-  drawn after they ended proves the device has handled another transaction since;
+- for a ``C``: the seq of the last control answered (ACK or ``r``) and of every control since that
+  ended unanswered or with a NAK (the device may have applied any of them), until an answer to an
+  ``R``, ``J`` or ``S`` drawn after they ended (anything but NAK ``NOT_LINKED``) proves the device
+  has handled another transaction since;
 - for a ``!``: the seq of the last event acknowledged and of the previous event;
 - for every kind: a (seq, id) still in flight (``busy``), so an answer never meets the wrong message.
+
+A rebooted device remembers nothing: both sets are emptied.
 
 Not thread-safe: the caller holds its lock (:class:`.transactions.Transactions`).
 """
@@ -61,7 +64,8 @@ class SeqRules:
     def other_answered(self, drawn: int) -> None:
         """An ``R``, ``J`` or ``S`` drawn as draw number ``drawn`` was answered (not NAK NOT_LINKED): the
         device handled it after every control that had ended by then, so it remembers none of them."""
-        self.controls = {s: at for s, at in self.controls.items() if at >= drawn}
+        if self.controls:
+            self.controls = {s: at for s, at in self.controls.items() if at >= drawn}
 
     def event_ended(self, seq: int, acked: bool) -> None:
         """A hub event was answered: ACK (the device remembers it) or NAK (it did not deliver it)."""
