@@ -28,7 +28,8 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 
     ``timeout`` is the connect deadline in seconds. Other keyword arguments go to
     :class:`hubwire.session.Session` (``heartbeat_ms``, ``retry_timeout``, ``tries``, ``cache_dir``,
-    ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``) and
+    ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``,
+    ``max_in_flight``: transactions in flight at once, default 64, the rest wait their turn) and
     ``hub``: a :class:`hubwire.HubChannels` the device may use; a hub channel the device expects
     that it lacks, or declares with another type or access, raises :class:`HubChannelError` here.
 

@@ -3,7 +3,8 @@
 The caller registers its transaction, writes the frame itself and sleeps on the transaction's
 event; the event loop matches the answer and wakes it. A round trip costs one thread hand-over,
 as a dedicated reader thread would, instead of two through the loop. Retries, NOT_LINKED and the
-stop-and-wait gate behave exactly as in :meth:`Transactions.transact`.
+stop-and-wait gate behave exactly as in :meth:`Transactions.transact`, and so does the bound on
+transactions in flight: beyond it the caller sleeps until a slot is handed to it.
 """
 from __future__ import annotations
 
@@ -12,9 +13,10 @@ import time
 from contextlib import contextmanager
 from typing import Any, Iterator, Optional
 
+from ..errors import NakError, Timeout
 from ..wire import messages as m
 from ..wire.frame import Frame
-from .transactions import GateCounts, Pending
+from .pending import GateCounts, Pending
 
 __all__ = ["ThreadGate", "transact", "wait_ready"]
 
@@ -78,7 +80,9 @@ def transact(core: Any, gate: ThreadGate, type: int, id: int, payload: bytes = b
                 while not tx.claim_control("user"):
                     core.sync_cv.wait(retry)
         try:
-            p = tx.register(type, id, payload, threaded=True)
+            p = tx.try_register(type, id, payload, threaded=True, slot=True)
+            if p is None:
+                p = _register_later(core, type, id, payload, retry, what)
             try:
                 tx.transmit(p)
                 return _answer(core, p, retry, what)
@@ -87,6 +91,28 @@ def transact(core: Any, gate: ThreadGate, type: int, id: int, payload: bytes = b
         finally:
             if type == m.CONTROL:
                 tx.release_control()
+
+
+def _register_later(core: Any, type: int, id: int, payload: bytes, retry: float, what: str) -> Pending:
+    """Wait for a slot; a ``C`` that finds every seq possibly remembered by the device reads the
+    board id first (its answer ends that memory, PROTOCOL.md 4.4)."""
+    tx = core.tx
+    tx.wait_turn_thread()
+    p: Optional[Pending] = tx.try_register(type, id, payload, threaded=True, slot=True, granted=True)
+    if p is None:
+        probe = tx.register(m.REQUEST, 0, b"", threaded=True)
+        try:
+            tx.transmit(probe)
+            _answer(core, probe, retry, what)
+        except NakError:
+            pass  # a board without an id: refused after it was taken in, as good
+        finally:
+            tx.unregister(probe)
+        tx.wait_turn_thread()
+        p = tx.try_register(type, id, payload, threaded=True, slot=True, granted=True)
+        if p is None:
+            raise Timeout(f"no sequence number free for a control{' of ' + what if what else ''} on {core.url}")
+    return p
 
 
 def _answer(core: Any, p: Pending, retry: float, what: str) -> Frame:

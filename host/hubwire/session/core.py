@@ -28,6 +28,7 @@ from .hub_channels import HubSide
 from .link import HELLO_INTERVAL, HelloOutcome, Link
 from .missions import Missions
 from .records import LinkHealth, State, Stats
+from .slots import DEFAULT_MAX_IN_FLIGHT
 from .streams import Streams
 from .transactions import Transactions
 
@@ -48,13 +49,16 @@ class SessionCore:
 
     def __init__(self, transport: Transport, *, dispatch: Any, connect_timeout: float = 5.0,
                  heartbeat_ms: int = 250, retry_timeout: float = 0.1, tries: int = 5, cache_dir: Any = None,
-                 progress: Optional[Callable[[int, int], None]] = None, hub: Optional[HubChannels] = None) -> None:
+                 progress: Optional[Callable[[int, int], None]] = None, hub: Optional[HubChannels] = None,
+                 max_in_flight: int = DEFAULT_MAX_IN_FLIGHT) -> None:
         self.loop = asyncio.get_running_loop()
         self._loop_thread = threading.current_thread()
         self.url = transport.url
         self.connect_timeout = connect_timeout
         self.retry_timeout = retry_timeout
         self.tries = tries
+        #: transactions in flight at most; more wait their turn (session/slots.py)
+        self.max_in_flight = max_in_flight
         self.progress = progress
         self.dispatch = dispatch
         self.stats = Stats()
@@ -292,6 +296,7 @@ class SessionCore:
 
     def _rebooted(self) -> None:
         self.stats.reboots += 1
+        self.tx.device_rebooted()  # a new device session remembers none of the hub's seqs
         self.events.last_seq = None
         self.hub.link_down()
         self.descriptor_nonce = None  # rediscover (from the cache if the hash is known)

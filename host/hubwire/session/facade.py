@@ -17,6 +17,7 @@ from . import blocking
 from .core import SessionCore
 from .events import QueueSink
 from .records import LinkHealth, State, Stats
+from .slots import DEFAULT_MAX_IN_FLIGHT
 from .runner import ThreadDispatcher, acquire_loop, on_loop_thread, release_loop, run_sync
 from .streams import ThreadSubscription, granted_interval
 
@@ -34,7 +35,8 @@ class Session:
     ``cache_dir`` (descriptor cache directory, ``None`` default, ``False`` disables), ``progress``
     (``callable(received, total)`` during descriptor downloads), ``on_link_lost`` /
     ``on_link_restored`` / ``on_reconnect`` callbacks, ``serial_kwargs`` (to ``serial_for_url``),
-    ``hub`` (the :class:`hubwire.HubChannels` offered to the device).
+    ``hub`` (the :class:`hubwire.HubChannels` offered to the device), ``max_in_flight`` (transactions
+    in flight at once, 1..200, default 64: more wait their turn, asleep, in the order they came).
     """
 
     def __init__(self, url: Optional[str] = None, baudrate: int = 115200, *, connect_timeout: float = 5.0,
@@ -44,7 +46,7 @@ class Session:
                  on_link_restored: Optional[Callable[[], None]] = None,
                  on_reconnect: Optional[Callable[[Descriptor], None]] = None,
                  serial_kwargs: Optional[Dict[str, Any]] = None, transport: Optional[Transport] = None,
-                 hub: Optional[HubChannels] = None) -> None:
+                 hub: Optional[HubChannels] = None, max_in_flight: int = DEFAULT_MAX_IN_FLIGHT) -> None:
         if transport is None:
             if url is None:
                 raise ValueError("Session needs a url or a transport")
@@ -52,7 +54,8 @@ class Session:
         self.transport = transport
         self.url = transport.url
         self._options = dict(connect_timeout=connect_timeout, heartbeat_ms=heartbeat_ms, retry_timeout=retry_timeout,
-                             tries=tries, cache_dir=cache_dir, progress=progress, hub=hub)
+                             tries=tries, cache_dir=cache_dir, progress=progress, hub=hub,
+                             max_in_flight=max_in_flight)
         self._initial_cbs = (on_link_lost, on_link_restored, on_reconnect)
         self._core: Optional[SessionCore] = None
         self._loop: Any = None

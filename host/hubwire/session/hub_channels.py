@@ -7,7 +7,11 @@ the bind report (``C`` id 0) and the queue of hub events (``!``) to the device.
   detection for controls stays exact: :meth:`Transactions.claim_control`).
 - Hub events: one queue per device session object, one event unacked at a time, the head retried
   every retry interval while linked, without limit, with the same seq; the queue survives link
-  loss and device reboots. Sent only once the device acked the bind report in this pairing of
+  loss and device reboots.
+- Seqs come from the session's transactions (:meth:`Transactions.hold`): a new event never carries
+  the seq of the last one the device acknowledged or of the one before it, a new bind report none
+  the device may remember for a control (PROTOCOL.md 4.1), and neither shares a (seq, id) with
+  anything else in flight. Sent only once the device acked the bind report in this pairing of
   device and hub sessions, and only for names it listed with access ``e``.
 - Persistence (optional): a ``keeper`` with ``add(name, payload) -> token`` (called as notify()
   queues an event; it may refuse by raising) and ``done(token)`` (the device answered it); events a
@@ -75,6 +79,7 @@ class HubSide:
         self._timer: Optional[asyncio.TimerHandle] = None
         #: optional persistence of the queue (see the module docs)
         self.keeper: Any = None
+        self._probe: Optional["asyncio.Task[None]"] = None  # a read that lets controls be numbered again
         #: answers the device's own R / C / J
         self.answers = HubAnswers(core, channels)
         channels.add_listener(self)
@@ -109,6 +114,8 @@ class HubSide:
         self.channels.remove_listener(self)
         if self._bind_later is not None:
             self._bind_later.cancel()
+        if self._probe is not None:
+            self._probe.cancel()
         self.link_down()
 
     # ------------------------------------------------------------------------- the pump
@@ -123,6 +130,7 @@ class HubSide:
             self._timer.cancel()
             self._timer = None
         if self._bind is not None:
+            self.core.tx.let_go(self._bind[0], 0, None)
             self._bind = None
             self._bind_wanted = True
             self.core.tx.release_control()
@@ -149,7 +157,14 @@ class HubSide:
                 core.tx.release_control()
                 log.error("hubwire: %d hub channels do not fit the bind report %s accepts", len(desc.hub), desc.name)
                 return
-            self._bind, self._bind_sends = (core.tx.next_seq(), payload), 0
+            seq = core.tx.hold(m.CONTROL, 0)
+            if seq is None:  # the device may remember every seq for a control: a read ends that
+                self._bind_wanted = True
+                core.tx.release_control()
+                if self._probe is None:
+                    self._probe = self.loop.create_task(self._read_board_id())
+                return
+            self._bind, self._bind_sends = (seq, payload), 0
             core.stats.binds_sent += 1
             failed = [f"{exp.name}: {m.nak_name(s)}" for exp, s in zip(desc.hub, self.statuses) if s]
             if failed:
@@ -160,6 +175,15 @@ class HubSide:
             self._send_head(desc)
         self._arm()
 
+    async def _read_board_id(self) -> None:
+        try:
+            await self.core.tx.transact_probe(self.core.retry_timeout, "board id")
+        except HubwireError:
+            pass  # the link is down or the device deaf: kicked again when it is back
+        finally:
+            self._probe = None
+        self.kick()
+
     def _send_bind(self) -> None:
         assert self._bind is not None
         seq, payload = self._bind
@@ -169,6 +193,8 @@ class HubSide:
     def _bind_unanswered(self) -> None:
         """``tries`` sends without an answer: give the application's writes their turn and try again
         a little later (the device may be busy or deaf; the report never blocks the link for long)."""
+        if self._bind is not None:
+            self.core.tx.let_go(self._bind[0], 0, None)
         self._bind = None
         self.core.tx.release_control()
         if self._bind_later is None:
@@ -187,8 +213,14 @@ class HubSide:
                 self.core.stats.hub_events_skipped += 1
                 log.warning("hubwire: %s takes no event %s: not sent", desc.name, clip(ev.name))
                 continue
+            if ev.seq is not None and ev.id != exp.id:  # renumbered by a new descriptor
+                self.core.tx.let_go(ev.seq, ev.id, None)
+                ev.seq = None
             if ev.seq is None:
-                ev.seq = self.core.tx.next_seq()
+                ev.seq = self.core.tx.hold(m.EVENT, exp.id)
+                if ev.seq is None:
+                    self._kick_in_a_while()  # no seq free: every one in use (bounded, so not for long)
+                    return
             ev.id = exp.id
             self.core.link.send_frame(m.EVENT, ev.seq, ev.id, ev.payload)
             self._head_out = True
@@ -218,6 +250,7 @@ class HubSide:
         """An ACK/NAK of the bind report or of the head event; False if it answers neither."""
         code = f.payload[0] if f.type == m.NAK and f.payload else 0
         if self._bind is not None and f.id == 0 and f.seq == self._bind[0]:
+            self.core.tx.let_go(f.seq, 0, f)
             self._bind = None
             self.core.tx.release_control()
             if f.type == m.ACK:
@@ -238,6 +271,7 @@ class HubSide:
                 self._kick_in_a_while()
                 return True
             ev = self.queue.popleft()
+            self.core.tx.let_go(f.seq, f.id, f)
             self._done(ev)
             if not self.queue:
                 self.core.wake()  # whoever waits for the queue to empty (wait_notified)

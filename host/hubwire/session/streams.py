@@ -182,7 +182,7 @@ class Streams:
             self.send_subscribe(sub.channel_id, interval)
 
     def send_subscribe(self, id: int, interval: int) -> None:
-        self.core.link.send_frame(m.SUBSCRIBE, self.core.tx.next_seq(), id, m.Subscribe(interval).pack())
+        self.core.link.send_frame(m.SUBSCRIBE, self.core.tx.next_seq(m.SUBSCRIBE, id), id, m.Subscribe(interval).pack())
 
     def end_all(self, exc: BaseException) -> None:
         """End every consumer with ``exc`` (the session closed, or cannot go on)."""

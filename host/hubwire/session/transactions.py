@@ -1,9 +1,12 @@
-"""Transactions (PROTOCOL.md §4.4): pending requests matched to answers by ``(seq, id)``, retries
-with the same seq, NOT_LINKED handling and the stop-and-wait rule for controls.
+"""Transactions (PROTOCOL.md §4.4): pending requests matched to answers by ``(seq, id)``, retries,
+NOT_LINKED handling and the stop-and-wait rule for controls.
 
-Many ``R``/``J``/``S`` may be in flight at once, but a ``C`` (write or call) runs alone: while it is
-unanswered nothing else is sent, so the device's duplicate detection (last seq per channel) is
-exact and a retried write is never applied twice.
+Many ``R``/``J``/``S`` may be in flight at once (at most ``max_in_flight``, the rest wait their
+turn: :mod:`.slots`), but a ``C`` (write or call) runs alone: while it is unanswered nothing else is
+sent, so the device's duplicate detection (the last control) is exact and a retried write is never
+applied twice. A retried ``C`` keeps its seq; a retried ``R``/``J``/``S`` (idempotent) takes a new
+one, so a late answer to an earlier try, or the fragments of one, never completes the new try. New
+seqs skip what the device may still remember (:mod:`.seqs`).
 
 Answers are matched on the event loop. A transaction is driven either by a coroutine on that loop
 (:meth:`Transactions.transact`, the asyncio API and discovery) or by the calling thread itself
@@ -17,136 +20,26 @@ import asyncio
 import random
 import threading
 import time
-from contextlib import asynccontextmanager
-from typing import Any, AsyncIterator, Dict, Optional, Tuple
+from typing import Any, Dict, Optional, Tuple
 
-from ..errors import NakError, Timeout
+from ..errors import HubwireError, NakError, Timeout
 from ..wire import messages as m
 from ..wire.frame import Frame
 from ..wire.messages import NakCode
+from .pending import Gate, GateCounts, Pending
+from .seqs import SeqRules
+from .slots import DEFAULT_MAX_IN_FLIGHT, Slots, Waiter
 
 __all__ = ["Pending", "GateCounts", "Gate", "Transactions"]
 
 #: the line speed assumed for a transport that names none (a pty, a socket)
 DEFAULT_BAUD = 115200
-
-
-class Pending:
-    """One transaction waiting for its answer. A coroutine waits on ``fut`` (re-armed when a
-    NOT_LINKED NAK is retried); a thread waits on ``event`` and reads ``answer`` / ``error``."""
-
-    __slots__ = ("type", "seq", "id", "wire", "fut", "event", "answer", "error", "sent_at", "tries")
-
-    def __init__(self, type: int, seq: int, id: int, wire: bytes, *, loop: Optional[asyncio.AbstractEventLoop] = None) -> None:
-        self.type = type
-        self.seq = seq
-        self.id = id
-        self.wire = wire
-        self.fut: Optional["asyncio.Future[Frame]"] = loop.create_future() if loop is not None else None
-        self.event: Optional[threading.Event] = None if loop is not None else threading.Event()
-        self.answer: Optional[Frame] = None
-        self.error: Optional[BaseException] = None
-        self.sent_at = 0.0
-        self.tries = 0
-
-    def done(self) -> bool:
-        if self.fut is not None:
-            return self.fut.done()
-        return self.answer is not None or self.error is not None
-
-    def resolve(self, f: Frame) -> None:
-        if self.fut is not None:
-            self.fut.set_result(f)
-        else:
-            self.answer = f
-            self.event.set()  # type: ignore[union-attr]
-
-    def fail(self, exc: BaseException) -> None:
-        if self.fut is not None:
-            self.fut.set_exception(exc)
-            self.fut.exception()  # retrieved by its waiter; keeps asyncio from logging it
-        else:
-            self.error = exc
-            self.event.set()  # type: ignore[union-attr]
-
-    def rearm(self) -> None:
-        if self.fut is not None:
-            self.fut = self.fut.get_loop().create_future()
-        else:
-            self.answer = None
-            self.event.clear()  # type: ignore[union-attr]
-
-    async def wait(self, timeout: float) -> Optional[Frame]:
-        """(Coroutine waiters) the answer within ``timeout`` s, or None; raises the error."""
-        fut = self.fut
-        assert fut is not None
-        if not fut.done():
-            await asyncio.wait((fut,), timeout=max(0.0, timeout))
-            if not fut.done():
-                return None
-        return fut.result()
-
-
-class GateCounts:
-    """The bookkeeping of a shared/exclusive gate: many R/S in flight, or one C alone (stop and
-    wait); a waiting C goes before new shared users. Subclasses add the waiting."""
-
-    def __init__(self) -> None:
-        self._shared = 0
-        self._excl = False
-        self._excl_waiting = 0
-
-    def _may_share(self) -> bool:
-        return not self._excl and not self._excl_waiting
-
-    def _may_own(self) -> bool:
-        return not self._excl and not self._shared
-
-
-class Gate(GateCounts):
-    """The gate for coroutines (the asyncio API)."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self._cond = asyncio.Condition()
-
-    @asynccontextmanager
-    async def shared(self) -> AsyncIterator[None]:
-        if not self._may_share():
-            async with self._cond:
-                await self._cond.wait_for(self._may_share)
-        self._shared += 1
-        try:
-            yield
-        finally:
-            self._shared -= 1
-            if self._excl_waiting and not self._shared:
-                await self._notify()
-
-    @asynccontextmanager
-    async def exclusive(self) -> AsyncIterator[None]:
-        if not self._may_own():
-            self._excl_waiting += 1
-            try:
-                async with self._cond:
-                    await self._cond.wait_for(self._may_own)
-            finally:
-                self._excl_waiting -= 1
-        self._excl = True
-        try:
-            yield
-        finally:
-            self._excl = False
-            await self._notify()
-
-    async def _notify(self) -> None:
-        async with self._cond:
-            self._cond.notify_all()
+_NOT_LINKED = bytes((NakCode.NOT_LINKED,))
 
 
 class Transactions:
     """Pending transactions of one session. ``core`` provides ``link``, ``stats``, ``url``,
-    ``retry_timeout``, ``tries``, ``connect_timeout`` and ``check_ready(timeout)``."""
+    ``retry_timeout``, ``tries``, ``connect_timeout``, ``max_in_flight`` and ``check_ready(timeout)``."""
 
     def __init__(self, core: Any) -> None:
         self.core = core
@@ -154,17 +47,48 @@ class Transactions:
         self.pending: Dict[Tuple[int, int], Pending] = {}
         self.lock = threading.Lock()
         self.gate = Gate()
-        self._seq = random.randrange(256)
+        self.rules = SeqRules(random.randrange(256))
+        #: (seq, id) of the hub's own frames in flight: its bind report and its head event
+        self.held: Dict[Tuple[int, int], int] = {}
+        self.slots = Slots(getattr(core, "max_in_flight", DEFAULT_MAX_IN_FLIGHT))
         #: who has a C outstanding: "user" (the application) or "hub" (the bind report), see claim_control
         self.control_owner: Optional[str] = None
 
-    def next_seq(self) -> int:
-        with self.lock:
-            return self._next_seq()
+    # -------------------------------------------------------------------------------- seqs
 
-    def _next_seq(self) -> int:
-        self._seq = (self._seq + 1) & 0xFF
-        return self._seq
+    def _busy(self, seq: int, id: int) -> bool:
+        return (seq, id) in self.pending or (seq, id) in self.held
+
+    def next_seq(self, type: int, id: int) -> int:
+        """A seq for a message nobody waits an answer for (a subscription cancelled at close)."""
+        with self.lock:
+            seq = self.rules.draw(type, id, self._busy)
+        return self.rules.seq if seq is None else seq
+
+    def hold(self, type: int, id: int) -> Optional[int]:
+        """A seq for the hub's own bind report or event to ``id``, held until :meth:`let_go`;
+        None when none is free (sent later)."""
+        with self.lock:
+            seq = self.rules.draw(type, id, self._busy)
+            if seq is not None:
+                self.held[(seq, id)] = type
+        return seq
+
+    def let_go(self, seq: int, id: int, answer: Optional[Frame]) -> None:
+        """The hub's own message ``(seq, id)`` is over: ``answer`` is its ACK/NAK, None if it ended unanswered."""
+        with self.lock:
+            type = self.held.pop((seq, id), None)
+            acked = answer is not None and answer.type == m.ACK
+            if type == m.CONTROL:
+                self.rules.control_answered(seq) if acked else self.rules.control_ended(seq)
+            elif type == m.EVENT and answer is not None:
+                self.rules.event_ended(seq, acked)
+
+    def device_rebooted(self) -> None:
+        with self.lock:
+            self.rules.device_rebooted()
+
+    # ----------------------------------------------------------------------- control right
 
     def claim_control(self, owner: str) -> bool:
         """Take the right to have a ``C`` outstanding: the application's controls and the hub's bind
@@ -183,22 +107,110 @@ class Transactions:
         elif owner == "hub":
             self.core.wake()
 
+    # ------------------------------------------------------------------------ the table
+
     def register(self, type: int, id: int, payload: bytes, *, threaded: bool = False) -> Pending:
-        """A new pending transaction with a seq not in use for ``id``; ``threaded``: waited for by a thread."""
-        with self.lock:
-            seq = self._next_seq()
-            while (seq, id) in self.pending:
-                seq = self._next_seq()
-            # a large payload goes out as fragments, and so does every retry (PROTOCOL.md 12)
-            p = Pending(type, seq, id, self.core.link.encode(type, seq, id, payload),
-                        loop=None if threaded else self.loop)
-            self.pending[(seq, id)] = p
+        """A new pending transaction outside the slots (discovery's window, a probe); see :meth:`try_register`."""
+        p = self.try_register(type, id, payload, threaded=threaded)
+        if p is None:
+            raise HubwireError(f"no sequence number free for channel id {id}")
         return p
 
+    def try_register(self, type: int, id: int, payload: bytes, *, threaded: bool = False,
+                     slot: bool = False, granted: bool = False) -> Optional[Pending]:
+        """A new pending transaction with a free seq (:mod:`.seqs`); ``threaded``: waited for by a thread.
+        ``slot``: it takes one of the session's slots (``granted``: it has one already); None when no
+        slot is free, or no seq (a ``C``: the device may remember every one), the slot given back."""
+        with self.lock:
+            if slot and not granted and not self.slots.take():
+                return None
+            seq = self.rules.draw(type, id, self._busy)
+            if seq is None:
+                w = self.slots.give_back() if slot else None
+            else:
+                # a large payload goes out as fragments, and so does every retry (PROTOCOL.md 12)
+                p = Pending(type, seq, id, self.core.link.encode(type, seq, id, payload),
+                            loop=None if threaded else self.loop)
+                p.payload, p.drawn, p.slot = payload, self.rules.draws, slot
+                self.pending[(seq, id)] = p
+                return p
+        if w is not None:
+            w.wake()
+        return None
+
     def unregister(self, p: Pending) -> None:
+        w = None
         with self.lock:
             if self.pending.get((p.seq, p.id)) is p:
                 del self.pending[(p.seq, p.id)]
+                if p.type == m.CONTROL and not p.acked:
+                    self.rules.control_ended(p.seq)
+                if p.slot:
+                    p.slot = False
+                    w = self.slots.give_back()
+        if w is not None:
+            w.wake()
+        if not p.done():
+            self.core.link.reassembler.abandon(p.seq, p.id)
+
+    def _renew(self, p: Pending) -> None:
+        """A retried R/J/S takes a new seq: what comes for the old one now finds nobody."""
+        with self.lock:
+            seq = self.rules.draw(p.type, p.id, self._busy)
+            if seq is None or self.pending.get((p.seq, p.id)) is not p:
+                return
+            old = p.seq
+            del self.pending[(old, p.id)]
+            p.seq, p.drawn = seq, self.rules.draws
+            p.wire = self.core.link.encode(p.type, seq, p.id, p.payload)
+            self.pending[(seq, p.id)] = p
+        self.core.link.reassembler.abandon(old, p.id)
+
+    # ---------------------------------------------------------------------- waiting turns
+
+    def _enqueue(self, threaded: bool) -> Waiter:
+        w = Waiter(None if threaded else self.loop)
+        with self.lock:
+            if self.slots.take():
+                w.granted = True
+            else:
+                self.slots.waiting.append(w)
+        return w
+
+    def _leave(self, w: Waiter) -> None:
+        with self.lock:
+            nxt = self.slots.leave(w)
+        if nxt is not None:
+            nxt.wake()
+
+    def wait_turn_thread(self) -> None:
+        """(Threads) wait asleep until a slot is this caller's; raises what failed the session meanwhile."""
+        w = self._enqueue(True)
+        assert w.event is not None
+        try:
+            while not w.granted and w.error is None:
+                w.event.wait(1.0)
+                if self.core.closed and not w.granted:
+                    raise HubwireError("session closed")
+        except BaseException:
+            self._leave(w)
+            raise
+        if w.error is not None:
+            raise w.error
+
+    async def wait_turn(self) -> None:
+        """(Coroutines) as :meth:`wait_turn_thread`."""
+        w = self._enqueue(False)
+        try:
+            if not w.granted:
+                await w.fut  # type: ignore[misc]
+        except BaseException:
+            self._leave(w)
+            raise
+        if w.error is not None:
+            raise w.error
+
+    # --------------------------------------------------------------------------- sending
 
     def transmit(self, p: Pending) -> None:
         p.tries += 1
@@ -212,12 +224,15 @@ class Transactions:
         return self.core.link.pacer.burst_time(wire) or len(wire) * 10.0 / DEFAULT_BAUD
 
     def retry(self, p: Pending) -> None:
+        """Send again: a ``C`` with its seq (the device's duplicate memory), anything else with a new one."""
         with self.lock:
             self.core.stats.retries += 1
+        if p.type != m.CONTROL:
+            self._renew(p)
         self.transmit(p)
 
     def silence(self, p: Pending, what: str) -> None:
-        """No answer within the retry timeout: send again with the same seq, or Timeout after ``tries``.
+        """No answer within the retry timeout: send again, or Timeout after ``tries``.
         A large answer still coming in (a fragment since the last send) is waited for instead."""
         if self.core.link.reassembler.receiving(p.seq, p.id, p.sent_at):
             p.sent_at = time.monotonic()
@@ -243,6 +258,14 @@ class Transactions:
             if p is None or p.done():
                 self.core.stats.unmatched_answers += 1
                 return False
+            if f.type != m.NAK:
+                if p.type == m.CONTROL:
+                    p.acked = True
+                    self.rules.control_answered(p.seq)
+                else:
+                    self.rules.other_answered(p.drawn)
+            elif p.type != m.CONTROL and f.payload[:1] != _NOT_LINKED:
+                self.rules.other_answered(p.drawn)  # refused after the device took it in (4.4)
             p.resolve(f)
         return True
 
@@ -251,13 +274,16 @@ class Transactions:
             for p in self.pending.values():
                 if not p.done():
                     p.fail(exc)
+            waiters = self.slots.fail_all(exc)
+        for w in waiters:
+            w.wake()
 
     async def transact(self, type: int, id: int, payload: bytes = b"", *, timeout: Optional[float] = None,
                        what: str = "") -> Frame:
         """Send one transaction and return its answer (ACK, ``r``, ``J``); raise NakError on NAK.
 
-        Retries with the same seq every ``retry_timeout`` up to ``tries`` times (Timeout after).
-        Controls (``C``) are stop-and-wait: they run alone.
+        Retries every ``retry_timeout`` up to ``tries`` times (Timeout after). Controls (``C``) are
+        stop-and-wait: they run alone. Beyond ``max_in_flight`` transactions it waits its turn.
         """
         core = self.core
         retry = core.retry_timeout if timeout is None else timeout / core.tries
@@ -267,7 +293,9 @@ class Transactions:
             while type == m.CONTROL and not self.claim_control("user"):
                 await core.changes(retry)  # the hub's bind report is out: a round trip at most
             try:
-                p = self.register(type, id, payload)
+                p = self.try_register(type, id, payload, slot=True)
+                if p is None:
+                    p = await self._register_later(type, id, payload, retry, what)
                 try:
                     self.transmit(p)
                     return await self._answer(p, retry, what)
@@ -276,6 +304,30 @@ class Transactions:
             finally:
                 if type == m.CONTROL:
                     self.release_control()
+
+    async def _register_later(self, type: int, id: int, payload: bytes, retry: float, what: str) -> Pending:
+        await self.wait_turn()
+        p = self.try_register(type, id, payload, slot=True, granted=True)
+        if p is None:  # a C with every seq possibly remembered: a read shows the device moved on
+            await self.transact_probe(retry, what)
+            await self.wait_turn()
+            p = self.try_register(type, id, payload, slot=True, granted=True)
+            if p is None:
+                raise Timeout(f"no sequence number free for a control{' of ' + what if what else ''} "
+                              f"on {self.core.url}")
+        return p
+
+    async def transact_probe(self, retry: float, what: str) -> None:
+        """Read the board id (``R`` id 0): its answer ends the device's memory of every control."""
+        p = self.register(m.REQUEST, 0, b"")
+        try:
+            self.transmit(p)
+            try:
+                await self._answer(p, retry, what)
+            except NakError:
+                pass  # a board without an id: refused after it was taken in, as good
+        finally:
+            self.unregister(p)
 
     async def _answer(self, p: Pending, retry: float, what: str) -> Frame:
         core = self.core
@@ -294,4 +346,3 @@ class Transactions:
             if p.fut.done():  # type: ignore[union-attr]
                 p.fut.result()  # type: ignore[union-attr]  # the link was lost meanwhile: raise
             self.retry(p)
-
