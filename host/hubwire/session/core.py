@@ -207,7 +207,7 @@ class SessionCore:
             return
         if self.state is State.READY:
             for cid in list(self.streams.subs):
-                self.streams.send_subscribe(cid, 0)
+                self.streams.send_subscribe(cid, 0, closing=True)
         self.state = State.CLOSED
         self.tx.fail_all(LinkLost("session closed"))
         self.streams.end_all(LinkLost("session closed"))

@@ -181,7 +181,12 @@ class Streams:
         if interval is not None:
             self.send_subscribe(sub.channel_id, interval)
 
-    def send_subscribe(self, id: int, interval: int) -> None:
+    def send_subscribe(self, id: int, interval: int, *, closing: bool = False) -> None:
+        """One ``S``, not retried; it waits while a control is out (an ``S`` between the tries of a
+        ``C`` would end the device's memory of it, PROTOCOL.md 4.1), unless the session closes."""
+        if self.core.tx.control_owner is not None and not closing:
+            self.core.loop.call_later(self.core.retry_timeout, self.send_subscribe, id, interval)
+            return
         self.core.link.send_frame(m.SUBSCRIBE, self.core.tx.next_seq(m.SUBSCRIBE, id), id, m.Subscribe(interval).pack())
 
     def end_all(self, exc: BaseException) -> None:

@@ -104,6 +104,7 @@ class Transactions:
             owner, self.control_owner = self.control_owner, None
         if owner == "user" and not self.loop.is_closed():
             self.loop.call_soon_threadsafe(self.core.hub.kick)
+            self.core.wake()  # the loop's own requests wait for a thread's control to end (transact)
         elif owner == "hub":
             self.core.wake()
 
@@ -292,6 +293,10 @@ class Transactions:
             await core.check_ready(max(core.connect_timeout, retry * core.tries))
             while type == m.CONTROL and not self.claim_control("user"):
                 await core.changes(retry)  # the hub's bind report is out: a round trip at most
+            # A thread's control (the synchronous API has a gate of its own) runs alone too: an R,
+            # J or S between its tries would end the device's memory of it (PROTOCOL.md 4.1).
+            while type != m.CONTROL and self.control_owner == "user":
+                await core.changes(retry)
             try:
                 p = self.try_register(type, id, payload, slot=True)
                 if p is None:

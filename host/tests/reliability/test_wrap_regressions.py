@@ -190,3 +190,38 @@ def test_a_bind_report_when_every_seq_may_be_remembered_reads_first_and_is_acked
     dev.wait_notified(20)
     assert core.stats.hub_events_delivered == delivered + 1
     assert (dev.ticks, dev.tick_last) == (1, 5)
+
+
+def test_a_loop_request_waits_for_a_threads_control_to_end(soak: Any) -> None:
+    """The synchronous API's controls have a gate of their own; a request the loop makes itself (a
+    stream resumed, a subscribe) must still not go between the tries of one: the device would take
+    the retry for a new write (PROTOCOL.md 4.1)."""
+    import asyncio
+    import threading
+
+    from hubwire.wire import messages as m
+
+    dev = soak
+    core = dev.session.core
+    tx = core.tx
+    left = dev.session.descriptor.by_name("left").id
+    lost = threading.Event()
+    on_answer = tx.on_answer
+
+    def drop_first_control_answer(f: Any) -> bool:
+        if f.type in (m.ACK, m.NAK) and tx.control_owner == "user" and not lost.is_set():
+            lost.set()  # the write's first ACK is lost: the hub will send the write again
+            return False
+        return on_answer(f)
+
+    tx.on_answer = drop_first_control_answer
+    before = dev.tokens_applied
+    writer = threading.Thread(target=dev.write, args=("token", 777))
+    writer.start()
+    assert lost.wait(20)
+    # the loop's own request while the write waits for its retry
+    fut = asyncio.run_coroutine_threadsafe(tx.transact(m.REQUEST, left), core.loop)
+    fut.result(20)
+    writer.join(20)
+    tx.on_answer = on_answer
+    assert (dev.token, dev.tokens_applied - before, dev.twice) == (777, 1, 0)
