@@ -238,10 +238,16 @@ class Transactions:
         if self.core.link.reassembler.receiving(p.seq, p.id, p.sent_at):
             p.sent_at = time.monotonic()
             return
-        if p.tries >= self.core.tries:
+        if p.tries >= self.tries_for(p):
             raise Timeout(f"no answer from the device on {self.core.url}{' for ' + what if what else ''} "
                           f"after {p.tries} tries")
         self.retry(p)
+
+    def tries_for(self, p: Pending) -> int:
+        """``tries``, and for a control in fragments one more per fragment: the device keeps what each
+        try brought (PROTOCOL.md 12.4), so a long value needs tries in proportion to its length."""
+        frames = p.wire.count(0)
+        return self.core.tries + (frames if p.type == m.CONTROL and frames > 1 else 0)
 
     def verdict(self, p: Pending, a: Frame, what: str) -> Optional[Frame]:
         """The answer to return; None for a NOT_LINKED NAK to ask again; NakError for the others."""
