@@ -88,7 +88,7 @@ def test_connect_timeout_when_nothing_answers(tmp_path: Any) -> None:
         hellos = [f for f in sent if f.type == m.HELLO]
         assert len(hellos) == len(sent) and 3 <= len(hellos) <= 8  # one hello every 100 ms
         h = m.Hello.unpack(hellos[0].payload)
-        assert (h.version, h.flags, h.max_payload, h.heartbeat_ms) == (1, 0, 255, 250) and h.nonce != 0
+        assert (h.version, h.flags, h.max_payload, h.heartbeat_ms) == (1, m.FLAG_SEQ_RULES, 255, 250) and h.nonce != 0
     finally:
         os.close(master)
         os.close(slave)

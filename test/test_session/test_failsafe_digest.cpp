@@ -142,7 +142,7 @@ TEST(HelloDigest, AnsweredToAHubThatAccepts32BytesOrMore) {
     ASSERT_EQ(frames[0].type, '*');
     const Bytes& h = frames[0].payload;
     ASSERT_EQ(h.size(), (size_t)kHelloDigestEnd) << hubMax;
-    EXPECT_EQ(h[1], kHelloDevice | kHelloReply | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
+    EXPECT_EQ(h[1], kHelloDevice | kHelloReply | kHelloSeqRules | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
     EXPECT_EQ(loadU32(&h[10]), probe.hash);  // the FNV hash stays where old hubs read it
     EXPECT_EQ(loadU16(&h[14]), probe.jsonLength);
     EXPECT_EQ(Bytes(h.begin() + kHelloSize, h.end()), digestInFlash(probe));

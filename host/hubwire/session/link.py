@@ -208,7 +208,7 @@ class Link:
 
     def send_hello(self, reply: bool) -> None:
         dhash, dlen = self.owner.hub_descriptor_id()  # the hub's own channels (PROTOCOL.md 10.5)
-        h = m.Hello(m.PROTOCOL_VERSION, m.FLAG_REPLY if reply else 0, self.nonce, HUB_MAX_PAYLOAD, self.heartbeat_ms,
+        h = m.Hello(m.PROTOCOL_VERSION, m.FLAG_SEQ_RULES | (m.FLAG_REPLY if reply else 0), self.nonce, HUB_MAX_PAYLOAD, self.heartbeat_ms,
                     dhash, dlen)
         # a lone 00 first ends whatever noise the device may have collected (an empty frame is
         # ignored by the receiver, PROTOCOL.md 1), so this hello is not lost with it
@@ -342,6 +342,11 @@ class Link:
             if not w.done():
                 w.set_result(None)
         self._hello_waiters.clear()
+        if not h.flags & m.FLAG_SEQ_RULES and (prev is None or prev.nonce != h.nonce):
+            log.warning("hubwire: the board on %s runs a Hubwire library older than its sequence rules "
+                        "(PROTOCOL.md 4.1): in some traffic mixes an acknowledged message may be lost when "
+                        "its 8-bit counter comes round; build the sketch again with this version of the "
+                        "library", self.transport.url)
         if prev is None:
             self._up()
             return HelloOutcome.FIRST

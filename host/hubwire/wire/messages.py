@@ -10,7 +10,7 @@ from .frame import Frame
 
 __all__ = [
     "PROTOCOL_VERSION", "HELLO", "HEARTBEAT", "CHUNK", "REQUEST", "RESPONSE", "CONTROL", "ACK", "NAK",
-    "EVENT", "SUBSCRIBE", "SAMPLE", "TYPE_NAMES", "FLAG_DEVICE", "FLAG_REPLY", "FLAG_F64",
+    "EVENT", "SUBSCRIBE", "SAMPLE", "TYPE_NAMES", "FLAG_DEVICE", "FLAG_REPLY", "FLAG_F64", "FLAG_SEQ_RULES",
     "NakCode", "nak_name", "fnv1a32", "Hello", "Heartbeat", "ChunkRequest", "Chunk", "Subscribe",
     "SubscribeAck", "Sample", "Nak", "BindReport", "describe", "FRAGMENT", "Fragment", "MISSION",
 ]
@@ -41,6 +41,9 @@ TYPE_NAMES: Dict[int, str] = {
 FLAG_DEVICE = 0x01
 FLAG_REPLY = 0x02
 FLAG_F64 = 0x04
+#: the sender numbers its messages by the rules of PROTOCOL.md 4.1 (sequence numbers never make a
+#: new message look like a retry, whatever the traffic mix)
+FLAG_SEQ_RULES = 0x08
 
 
 class NakCode(enum.IntEnum):

@@ -239,7 +239,7 @@ void Session::sendHello(uint8_t flags) {
   if (!nonceDrawn_) drawNonce((const uint8_t*)&hubNonce_);  // no hub heard this boot: 0, or any earlier hub's
   uint8_t* p = tx().payload();
   p[0] = kProtocolVersion;
-  p[1] = (uint8_t)(flags | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
+  p[1] = (uint8_t)(flags | kHelloSeqRules | (HUBWIRE_HAS_F64 ? kHelloF64 : 0));
   memcpy(p + 2, &nonce_, 4);  // as it is in memory: that is its wire form (config.h)
   // The fixed fields and the digest, just before the JSON in flash (channels/tables.h); the digest
   // goes to a hub that accepts it: one that accepts only 16 bytes gets the hello it knows.

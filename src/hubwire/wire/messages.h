@@ -24,7 +24,9 @@ enum MessageType : uint8_t {
   kMsgFragment = 'F',  // a piece of a message too long for one frame (PROTOCOL.md 12)
 };
 
-enum HelloFlags : uint8_t { kHelloDevice = 1, kHelloReply = 2, kHelloF64 = 4 };
+// kHelloSeqRules: the sender numbers its messages by the rules of PROTOCOL.md 4.1 (no traffic mix
+// makes a new message look like a retry); a peer without it is told about (the hub warns).
+enum HelloFlags : uint8_t { kHelloDevice = 1, kHelloReply = 2, kHelloF64 = 4, kHelloSeqRules = 8 };
 
 const uint8_t kHelloSize = 16;        // a hello without the digest: what every peer accepts
 const uint8_t kHelloFixed = 10;       // hello 6..15: payload limit, heartbeat, descriptor hash and length
