@@ -247,7 +247,7 @@ class Transactions:
         """``tries``, and for a control in fragments one more per fragment: the device keeps what each
         try brought (PROTOCOL.md 12.4), so a long value needs tries in proportion to its length."""
         frames = p.wire.count(0)
-        return self.core.tries + (frames if p.type == m.CONTROL and frames > 1 else 0)
+        return int(self.core.tries) + (frames if p.type == m.CONTROL and frames > 1 else 0)
 
     def verdict(self, p: Pending, a: Frame, what: str) -> Optional[Frame]:
         """The answer to return; None for a NOT_LINKED NAK to ask again; NakError for the others."""
