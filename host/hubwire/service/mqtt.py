@@ -12,13 +12,15 @@ import json
 import logging
 import secrets
 import socket
-from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Set
+import ssl
+from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Sequence, Set, Tuple
 
 import aiomqtt
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from .board import BoardBridge
+from .inbound import Inbound
 from .outbox import Outbox
 from .topics import OFFLINE, ONLINE, BridgeConfig, Topics, dumps
 
@@ -37,6 +39,20 @@ if _client_log.level == logging.NOTSET:
 
 #: small messages go out at once (with Nagle's algorithm a reply waits for the peer's delayed ACK)
 NODELAY = ((socket.IPPROTO_TCP, socket.TCP_NODELAY, 1),)
+
+#: commands waiting for a worker; beyond it they are dropped (and counted)
+INBOUND_QUEUE = 256
+#: commands taken per second, on average, and in one burst; beyond it they are dropped (and counted)
+INBOUND_RATE_HZ = 200.0
+INBOUND_BURST = 200
+#: commands carried out at once (each waits for its board)
+WORKERS = 8
+#: a warning about dropped commands at most this often, seconds
+DROP_LOG_INTERVAL_S = 10.0
+#: messages aiomqtt holds before the bridge takes them (the bridge takes them at once)
+CLIENT_QUEUE = 4 * INBOUND_QUEUE
+#: boards of other services remembered (from their retained descriptors)
+MAX_ELSEWHERE = 4096
 
 
 class BoardLike(Protocol):
@@ -60,14 +76,18 @@ class FleetLike(Protocol):
 
 async def run_bridge(fleet: FleetLike, host: str, port: int = 1883, *, prefix: str = "hubwire",
                      config: Optional[BridgeConfig] = None, username: Optional[str] = None,
-                     password: Optional[str] = None, **settings: Any) -> None:
+                     password: Optional[str] = None, tls_context: Optional[ssl.SSLContext] = None,
+                     reply_prefixes: Sequence[str] = (), **settings: Any) -> None:
     """Bridge ``fleet`` to the MQTT broker at ``host:port`` until cancelled.
 
     ``settings`` are fields of :class:`BridgeConfig` (``discovery_prefix``, ``service_id``,
-    ``max_rate_hz``, ``streams``, ...), or pass a whole ``config``.
+    ``max_rate_hz``, ``streams``, ...), or pass a whole ``config``. ``tls_context``: connect over
+    TLS (``hubwire.service.broker.BrokerSettings.tls_context``); ``reply_prefixes``: where replies
+    may be published (default: under ``prefix``).
     """
     cfg = config or BridgeConfig(prefix=prefix, **settings)
-    await Bridge(fleet, host, port, cfg, username=username, password=password).run()
+    await Bridge(fleet, host, port, cfg, username=username, password=password, tls_context=tls_context,
+                 reply_prefixes=reply_prefixes).run()
 
 
 class Bridge:
@@ -75,14 +95,21 @@ class Bridge:
     has us (tests and the bench wait on it)."""
 
     def __init__(self, fleet: FleetLike, host: str, port: int, config: BridgeConfig, *,
-                 username: Optional[str] = None, password: Optional[str] = None) -> None:
+                 username: Optional[str] = None, password: Optional[str] = None,
+                 tls_context: Optional[ssl.SSLContext] = None, reply_prefixes: Sequence[str] = ()) -> None:
         self.fleet = fleet
         self.host = host
         self.port = port
         self.config = config
         self.username = username
         self.password = password
+        self.tls_context = tls_context
         self.topics = Topics(config.prefix, config.discovery_prefix)
+        #: replies go only under these (a sender must not make the bridge publish anywhere it likes)
+        self.reply_prefixes: Tuple[str, ...] = tuple(
+            p if p.endswith("/") else p + "/" for p in (reply_prefixes or (self.topics.prefix,)))
+        self.inbound: "Inbound[Tuple[aiomqtt.Message, str, str, Optional[str]]]" = Inbound(
+            INBOUND_QUEUE, INBOUND_RATE_HZ, INBOUND_BURST, DROP_LOG_INTERVAL_S, log)
         self.outbox = Outbox(config.event_backlog)
         #: names this run of the bridge in event ids, so ids never repeat across restarts
         self.run_id = secrets.token_hex(4)
@@ -97,7 +124,9 @@ class Bridge:
     # ---------------------------------------------------------------------------- lifecycle
 
     async def run(self) -> None:
-        watcher = asyncio.get_running_loop().create_task(self._watch_fleet())
+        loop = asyncio.get_running_loop()
+        watcher = loop.create_task(self._watch_fleet())
+        workers = [loop.create_task(self._worker()) for _ in range(WORKERS)]
         try:
             while True:
                 try:
@@ -109,6 +138,8 @@ class Bridge:
                 await asyncio.sleep(self.config.reconnect_s)
         finally:
             watcher.cancel()
+            for w in workers:
+                w.cancel()
             for b in self.boards.values():
                 b.close()
             for t in list(self._tasks):
@@ -121,7 +152,8 @@ class Bridge:
                                   protocol=aiomqtt.ProtocolVersion.V5, will=will, clean_start=True,
                                   keepalive=self.config.keepalive, username=self.username,
                                   password=self.password, socket_options=NODELAY,
-                                  logger=_client_log) as client:
+                                  tls_context=self.tls_context, logger=_client_log,
+                                  max_queued_incoming_messages=CLIENT_QUEUE) as client:
             self.client = client
             self.connections += 1
             await client.publish(status, ONLINE, qos=1, retain=True)
@@ -140,9 +172,9 @@ class Bridge:
                 for t in done:
                     t.result()
             except asyncio.CancelledError:
-                # a clean stop: say so (the will only covers an unclean end)
+                # a clean stop: say so (a clean disconnect drops the will); the service awaits this
                 try:
-                    await asyncio.wait_for(client.publish(status, OFFLINE, qos=1, retain=True), 2)
+                    await asyncio.wait_for(client.publish(status, OFFLINE, qos=1, retain=True), 1.0)
                 except (aiomqtt.MqttError, asyncio.TimeoutError):
                     pass
                 raise
@@ -211,6 +243,9 @@ class Bridge:
             return True
         except aiomqtt.MqttError:
             return False
+        except (ValueError, TypeError) as e:  # a topic paho refuses: checked before, so a bug
+            log.error("hubwire serve: MQTT: could not publish to %r: %s", topic, e)
+            return False
 
     # ----------------------------------------------------------------------------- commands
 
@@ -228,16 +263,48 @@ class Bridge:
         if parsed is None:
             return
         key, op, channel = parsed
+        if key not in self.boards and key in self.elsewhere:
+            return  # a board of another service on this broker: that one answers
+        self.inbound.offer((msg, key, op, channel))
+
+    async def _worker(self) -> None:
+        while True:
+            msg, key, op, channel = await self.inbound.get()
+            try:
+                await self._command(msg, key, op, channel)
+            except asyncio.CancelledError:
+                raise
+            except Exception as e:  # noqa: BLE001 - one command's bug must not end the worker
+                log.error("hubwire serve: MQTT: %s %s/%s: %s: %s", op, key, channel, type(e).__name__, e)
+
+    async def _command(self, msg: aiomqtt.Message, key: str, op: str, channel: Optional[str]) -> None:
         payload = msg.payload if isinstance(msg.payload, (bytes, bytearray)) else str(msg.payload or "").encode()
         reply = Reply(self, msg.properties, key)
-        bb = self.boards.get(key)
-        if bb is None and key in self.elsewhere:
-            return  # a board of another service on this broker: that one answers
-        if bb is None:
-            self.spawn(reply.error(op, channel, "UnknownBoard",
-                                   f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}"))
+        if reply.refused is not None:
+            await reply.error(op, channel, "BadRequest", reply.refused)
             return
-        self.spawn(bb.command(op, channel, bytes(payload), reply))
+        bb = self.boards.get(key)
+        if bb is None:
+            await reply.error(op, channel, "UnknownBoard",
+                              f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}")
+            return
+        await bb.command(op, channel, bytes(payload), reply)
+
+    def reply_refusal(self, topic: str) -> Optional[str]:
+        """Why the bridge will not publish a reply to ``topic`` (None: it will)."""
+        if not topic or any(c in topic for c in "+#\0"):
+            return f"reply topic {topic!r} is empty or has a wildcard or NUL"
+        try:
+            n = len(topic.encode("utf-8"))
+        except UnicodeEncodeError:
+            return "reply topic is not valid UTF-8"
+        if n > 65535:
+            return "reply topic is too long"
+        if not topic.startswith(self.reply_prefixes):
+            return f"reply topic {topic!r} is outside {', '.join(self.reply_prefixes)} (the reply prefixes)"
+        if self.topics.parse_command(topic) is not None or topic.startswith(f"{self.topics.prefix}/_service/"):
+            return f"reply topic {topic!r} is a command or status topic of the bridge"
+        return None
 
 
     def _note_descriptor(self, topic: str, payload: Any) -> None:
@@ -247,6 +314,8 @@ class Bridge:
         except (ValueError, TypeError, AttributeError):
             service = None
         if isinstance(service, str) and service != self.config.service_id and key not in self.boards:
+            if len(self.elsewhere) >= MAX_ELSEWHERE and key not in self.elsewhere:
+                self.elsewhere.pop(next(iter(self.elsewhere)))  # the oldest: its service answers UnknownBoard too
             self.elsewhere[key] = service
         else:
             self.elsewhere.pop(key, None)
@@ -269,28 +338,50 @@ class Reply:
         self.correlation: Optional[bytes] = getattr(props, "CorrelationData", None) if props is not None else None
         self.rpc_id: Any = None
         self.is_rpc = False
+        #: why the reply topic the sender named is refused (the command is not carried out)
+        self.refused: Optional[str] = None
+        self._check()
 
-    def envelope(self, reply_to: Optional[str], rpc_id: Any) -> None:
+    def _check(self) -> None:
+        if self.topic is not None:
+            self.refused = self.bridge.reply_refusal(self.topic)
+            if self.refused is not None:
+                self.topic = None  # the refusal goes to the board's error topic
+                log.warning("hubwire serve: MQTT: BadRequest: %s; the command to %s was refused",
+                            self.refused, self.key)
+
+    def envelope(self, reply_to: Any, rpc_id: Any) -> None:
         self.is_rpc = True
         self.rpc_id = rpc_id
-        if self.topic is None:
-            self.topic = reply_to or self.bridge.topics.rpc_reply(self.key)
+        if self.topic is None and self.refused is None:
+            self.topic = self.bridge.topics.rpc_reply(self.key) if reply_to is None else str(reply_to)
+            self._check()
 
     async def send(self, body: Dict[str, Any]) -> None:
         if self.is_rpc:
             body = {"id": self.rpc_id, **body}
         if self.topic is None:
             if body.get("ok") is False:
-                await self.bridge.send(self.bridge.topics.errors(self.key), dumps(body), qos=1)
+                await self.bridge.send(self.bridge.topics.errors(self.key), _dumps(body), qos=1)
             return
         props = None
         if self.correlation is not None:
             props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
             props.CorrelationData = self.correlation
-        await self.bridge.send(self.topic, dumps(body), qos=1, properties=props)
+        await self.bridge.send(self.topic, _dumps(body), qos=1, properties=props)
 
     async def ok(self, **fields: Any) -> None:
         await self.send({"ok": True, **fields})
 
     async def error(self, op: str, channel: Optional[str], kind: str, message: str, **extra: Any) -> None:
         await self.send({"ok": False, "op": op, "channel": channel, "error": kind, "message": message, **extra})
+
+
+def _dumps(body: Dict[str, Any]) -> str:
+    """A reply as JSON; text that is not valid Unicode (a lone surrogate in an ``id``) escaped."""
+    text = dumps(body)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        text = json.dumps(body, separators=(",", ":"), allow_nan=False)
+    return text
