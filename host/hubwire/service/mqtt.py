@@ -120,6 +120,7 @@ class Bridge:
         #: boards other services on the same broker announce (key: service id), from their descriptors
         self.elsewhere: Dict[str, str] = {}
         self._tasks: Set["asyncio.Task[Any]"] = set()
+        self._failing = False
 
     # ---------------------------------------------------------------------------- lifecycle
 
@@ -132,7 +133,10 @@ class Bridge:
                 try:
                     await self._session()
                 except aiomqtt.MqttError as e:
-                    log.info("hubwire: broker %s:%d: %s", self.host, self.port, e)
+                    # the first failure of a streak shows without -v (a refused password, a bad certificate)
+                    (log.info if self._failing else log.warning)("hubwire serve: MQTT: broker %s:%d: %s",
+                                                                 self.host, self.port, e)
+                    self._failing = True
                 self.client = None
                 self.connected.clear()
                 await asyncio.sleep(self.config.reconnect_s)
@@ -156,6 +160,7 @@ class Bridge:
                                   max_queued_incoming_messages=CLIENT_QUEUE) as client:
             self.client = client
             self.connections += 1
+            self._failing = False
             await client.publish(status, ONLINE, qos=1, retain=True)
             for f in self.topics.command_filters():
                 await client.subscribe(f, qos=1)
