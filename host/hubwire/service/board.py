@@ -20,7 +20,8 @@ from .topics import OFFLINE, ONLINE, BadPayload, dumps, parse_value, to_json
 
 if TYPE_CHECKING:
     from ..aio import AsyncDevice
-    from .mqtt import Bridge, Reply
+    from .mqtt import Bridge
+    from .reply import Reply
 
 __all__ = ["BoardBridge"]
 

@@ -16,13 +16,13 @@ import ssl
 from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Sequence, Set, Tuple
 
 import aiomqtt
-from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from .board import BoardBridge
 from .inbound import Inbound
+from .reply import Reply
 from .outbox import Outbox
-from .topics import OFFLINE, ONLINE, BridgeConfig, Topics, dumps
+from .topics import OFFLINE, ONLINE, BridgeConfig, Topics
 
 if TYPE_CHECKING:
     from ..aio import AsyncDevice
@@ -121,6 +121,9 @@ class Bridge:
         self.elsewhere: Dict[str, str] = {}
         self._tasks: Set["asyncio.Task[Any]"] = set()
         self._failing = False
+        #: commands refused for their reply topic; when that was last logged
+        self.refusals = 0
+        self._refusal_logged_at: Optional[float] = None
 
     # ---------------------------------------------------------------------------- lifecycle
 
@@ -295,10 +298,20 @@ class Bridge:
             return
         await bb.command(op, channel, bytes(payload), reply)
 
+    def note_refusal(self, why: str, key: str) -> None:
+        """Log a refused command: the first at once, then a count at most every DROP_LOG_INTERVAL_S."""
+        self.refusals += 1
+        now = asyncio.get_running_loop().time()
+        if self._refusal_logged_at is None or now - self._refusal_logged_at >= DROP_LOG_INTERVAL_S:
+            self._refusal_logged_at = now
+            log.warning("hubwire serve: MQTT: BadRequest: %s; the command to %s was refused (%d refused so far)",
+                        why, key, self.refusals)
+
     def reply_refusal(self, topic: str) -> Optional[str]:
         """Why the bridge will not publish a reply to ``topic`` (None: it will)."""
+        shown = repr(topic[:80]) + ("..." if len(topic) > 80 else "")
         if not topic or any(c in topic for c in "+#\0"):
-            return f"reply topic {topic!r} is empty or has a wildcard or NUL"
+            return f"reply topic {shown} is empty or has a wildcard or NUL"
         try:
             n = len(topic.encode("utf-8"))
         except UnicodeEncodeError:
@@ -306,9 +319,9 @@ class Bridge:
         if n > 65535:
             return "reply topic is too long"
         if not topic.startswith(self.reply_prefixes):
-            return f"reply topic {topic!r} is outside {', '.join(self.reply_prefixes)} (the reply prefixes)"
+            return f"reply topic {shown} is outside {', '.join(self.reply_prefixes)} (the reply prefixes)"
         if self.topics.parse_command(topic) is not None or topic.startswith(f"{self.topics.prefix}/_service/"):
-            return f"reply topic {topic!r} is a command or status topic of the bridge"
+            return f"reply topic {shown} is a command or status topic of the bridge"
         return None
 
 
@@ -329,64 +342,3 @@ class Bridge:
             log.error("hubwire serve: MQTT: board %r is also served by service %r on this broker; give one "
                       "of the boards another device name (each board key must be unique on a broker)",
                       key, service)
-
-
-class Reply:
-    """Where the answer to one command goes: the MQTT 5 response topic (with its correlation data),
-    the ``reply_to`` of an ``rpc`` envelope (MQTT 3.1.1 clients), or, for errors only, the board's
-    ``error`` topic."""
-
-    def __init__(self, bridge: Bridge, props: Optional[Properties], key: str) -> None:
-        self.bridge = bridge
-        self.key = key
-        self.topic: Optional[str] = getattr(props, "ResponseTopic", None) if props is not None else None
-        self.correlation: Optional[bytes] = getattr(props, "CorrelationData", None) if props is not None else None
-        self.rpc_id: Any = None
-        self.is_rpc = False
-        #: why the reply topic the sender named is refused (the command is not carried out)
-        self.refused: Optional[str] = None
-        self._check()
-
-    def _check(self) -> None:
-        if self.topic is not None:
-            self.refused = self.bridge.reply_refusal(self.topic)
-            if self.refused is not None:
-                self.topic = None  # the refusal goes to the board's error topic
-                log.warning("hubwire serve: MQTT: BadRequest: %s; the command to %s was refused",
-                            self.refused, self.key)
-
-    def envelope(self, reply_to: Any, rpc_id: Any) -> None:
-        self.is_rpc = True
-        self.rpc_id = rpc_id
-        if self.topic is None and self.refused is None:
-            self.topic = self.bridge.topics.rpc_reply(self.key) if reply_to is None else str(reply_to)
-            self._check()
-
-    async def send(self, body: Dict[str, Any]) -> None:
-        if self.is_rpc:
-            body = {"id": self.rpc_id, **body}
-        if self.topic is None:
-            if body.get("ok") is False:
-                await self.bridge.send(self.bridge.topics.errors(self.key), _dumps(body), qos=1)
-            return
-        props = None
-        if self.correlation is not None:
-            props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
-            props.CorrelationData = self.correlation
-        await self.bridge.send(self.topic, _dumps(body), qos=1, properties=props)
-
-    async def ok(self, **fields: Any) -> None:
-        await self.send({"ok": True, **fields})
-
-    async def error(self, op: str, channel: Optional[str], kind: str, message: str, **extra: Any) -> None:
-        await self.send({"ok": False, "op": op, "channel": channel, "error": kind, "message": message, **extra})
-
-
-def _dumps(body: Dict[str, Any]) -> str:
-    """A reply as JSON; text that is not valid Unicode (a lone surrogate in an ``id``) escaped."""
-    text = dumps(body)
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:
-        text = json.dumps(body, separators=(",", ":"), allow_nan=False)
-    return text

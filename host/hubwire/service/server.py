@@ -250,11 +250,16 @@ class _Client:
         dev = self._device(msg)
         key = self.fleet.resolve(str(msg.get("board"))).key
         interval = msg.get("interval_ms", 100)
-        if not isinstance(interval, int) or isinstance(interval, bool) or not 0 < interval <= 3_600_000:
-            raise Usage(f"interval_ms is a whole number of milliseconds, not {interval!r}")
+        if not isinstance(interval, (int, float)) or isinstance(interval, bool) or not 0 < interval <= 3_600_000:
+            raise Usage(f"interval_ms is a number of milliseconds, not {interval!r}")
+        interval = int(interval)
         st = dev.stream(str(msg.get("channel")), interval_ms=interval, meta=True)
         await st.open()  # errors (not streamable, refused) go back as the answer
-        self._subscribe(msg, self._samples(msg.get("sub"), key, st, interval))
+        try:
+            self._subscribe(msg, self._samples(msg.get("sub"), key, st, interval))
+        except HubwireError:  # another request took the last place meanwhile
+            await st.aclose()
+            raise
         return {"granted_ms": st.granted_ms}
 
     async def _samples(self, sub: Any, key: str, st: Any, interval: int) -> None:
