@@ -87,7 +87,7 @@ async def measure(args: argparse.Namespace, port: int, bridge_pid: int, broker_p
     seq_span: Dict[str, List[int]] = {}  # board: [last seq, samples the board sent since the first]
     counting = False
     replies: Dict[bytes, "asyncio.Future[Any]"] = {}
-    reply_topic = f"bench/replies/{uuid.uuid4().hex}"
+    reply_topic = f"hubwire/replies/{uuid.uuid4().hex}"  # replies go only under the reply prefix
     async with aiomqtt.Client("127.0.0.1", port, protocol=aiomqtt.ProtocolVersion.V5, socket_options=NODELAY) as client:
         await client.subscribe("hubwire/+/stream/imu", qos=0)
         await client.subscribe(reply_topic, qos=1)

@@ -20,11 +20,17 @@ from .topics import OFFLINE, ONLINE, BadPayload, dumps, parse_value, to_json
 
 if TYPE_CHECKING:
     from ..aio import AsyncDevice
-    from .mqtt import Bridge, Reply
+    from .mqtt import Bridge
+    from .reply import Reply
 
 __all__ = ["BoardBridge"]
 
 _NEEDS = {"set": "w", "call": "c", "read": "r"}
+
+
+class BadRequest(Exception):
+    """A command the bridge refuses whole (answered ``BadRequest``): a reply topic outside the
+    reply prefixes."""
 
 
 class BoardBridge:
@@ -237,6 +243,7 @@ class BoardBridge:
     # ----------------------------------------------------------------------------- commands
 
     async def command(self, op: str, chan: Optional[str], payload: bytes, reply: "Reply") -> None:
+        """Carry out one command and answer it; every malformed one gets a typed error."""
         try:
             if op == "rpc":
                 op, chan, payload = self._unwrap(payload, reply)
@@ -244,8 +251,14 @@ class BoardBridge:
                 ch = self.t.channel(self.desc, chan)  # a topic level: the channel it stands for
                 chan = ch.name if ch is not None else chan
             await self._command(op, chan or "", payload, reply)
+        except BadRequest as e:
+            await reply.error(op, chan, "BadRequest", str(e))
         except BadPayload as e:
             await reply.error(op, chan, "InvalidValue", str(e))
+        except RecursionError:
+            await reply.error(op, chan, "BadRequest", "payload nested too deeply")
+        except (ValueError, TypeError, UnicodeError) as e:
+            await reply.error(op, chan, "InvalidValue", f"{type(e).__name__}: {e}")
         except Exception as e:  # noqa: BLE001  (a reply, whatever went wrong: no client waits forever)
             await reply.error(op, chan, "Error", f"{type(e).__name__}: {e}")
 
@@ -254,8 +267,9 @@ class BoardBridge:
         env = parse_value(payload)
         if not isinstance(env, dict):
             raise BadPayload('rpc payload must be a JSON object {"op": ..., "channel": ..., "value": ..., "id": ...}')
-        reply_to = env.get("reply_to")
-        reply.envelope(reply_to if isinstance(reply_to, str) and reply_to else None, env.get("id"))
+        reply.envelope(env.get("reply_to"), env.get("id"))
+        if reply.refused is not None:
+            raise BadRequest(reply.refused)
         op, chan = env.get("op"), env.get("channel")
         if op not in ("set", "call", "read", "subscribe", "unsubscribe") or not isinstance(chan, str):
             raise BadPayload("rpc needs \"op\" (set, call, read, subscribe, unsubscribe) and \"channel\"")

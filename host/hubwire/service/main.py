@@ -6,17 +6,24 @@ import asyncio
 import inspect
 import logging
 import signal
+import ssl
 import sys
-from typing import Any, Awaitable, Callable, List, Optional, Sequence, Tuple
+from typing import Any, Awaitable, Callable, Dict, List, Optional, Sequence, Tuple
 
 from ..errors import HubwireError
+from .broker import BrokerSettings, argv_options, settings_from_args
+from .broker import broker_address as parse_address
 from .fleet import Fleet
 from .protocol import default_serve_socket
 from .server import Server
 
-__all__ = ["add_commands", "serve", "cmd_serve", "cmd_list"]
+__all__ = ["add_commands", "serve", "cmd_serve", "cmd_list", "SHUTDOWN_S"]
 
 log = logging.getLogger("hubwire.service")
+
+#: after SIGTERM / SIGINT the service is gone within this long: the bridge says `offline`, the
+#: boards' links close; whatever has not finished by then is abandoned
+SHUTDOWN_S = 2.0
 
 
 def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
@@ -42,6 +49,8 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
     s.add_argument("--mqtt-id", default=None, metavar="ID",
                    help="this service's id on the broker (default: the host name); each service on one "
                         "broker needs its own")
+    for flags, kw in argv_options():
+        s.add_argument(*flags, **kw)
     s.add_argument("--http", type=int, default=None, metavar="HTTP_PORT",
                    help="also serve the dashboard on this port (hubwire.dashboard; docs/DASHBOARD.md)")
     s.add_argument("--http-host", default="127.0.0.1",
@@ -57,38 +66,52 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
 
 async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] = None,
                 mqtt: Optional[str] = None, ready: Any = None,
-                clients: Sequence[Callable[[Fleet], Awaitable[Any]]] = (), mqtt_id: Optional[str] = None) -> None:
+                clients: Sequence[Callable[[Fleet], Awaitable[Any]]] = (), mqtt_id: Optional[str] = None,
+                broker: Optional[BrokerSettings] = None) -> None:
     """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`);
-    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``;
-    each of ``clients`` (the dashboard) runs on the fleet as one more task until the service stops."""
+    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``
+    (or for ``broker``: then with its username, password, TLS and reply prefixes too); each of
+    ``clients`` (the dashboard) runs on the fleet as one more task until the service stops. A stop
+    takes at most :data:`SHUTDOWN_S`."""
     server = Server(fleet, socket)
     await server.start()
     await fleet.start()
     task: Optional["asyncio.Future[Any]"] = None
     others: List["asyncio.Future[Any]"] = []
     try:
-        if bridge is not None and mqtt is not None:
-            host, port = broker_address(mqtt)
-            res = bridge(fleet, host=host, port=port, **({"service_id": mqtt_id} if mqtt_id else {}))
+        if bridge is not None and (mqtt is not None or broker is not None):
+            if broker is None:
+                host, port = broker_address(mqtt or "")
+                kw: Dict[str, Any] = {"service_id": mqtt_id} if mqtt_id else {}
+            else:
+                host, port, kw = broker.host, broker.effective_port, broker.bridge_kwargs()
+            res = bridge(fleet, host=host, port=port, **kw)
             task = asyncio.ensure_future(res) if inspect.isawaitable(res) else None
         others = [asyncio.ensure_future(c(fleet)) for c in clients]
         if ready is not None:
             ready()
         await asyncio.Event().wait()
     finally:
-        for t in ([task] if task is not None else []) + others:
+        deadline = asyncio.get_running_loop().time() + SHUTDOWN_S
+        running = ([task] if task is not None else []) + others
+        for t in running:
             t.cancel()
-        await asyncio.gather(*others, return_exceptions=True)
+        # awaited, not only cancelled: the bridge's clean stop publishes `offline` before it
+        # disconnects (a clean disconnect drops the last will)
+        if running:
+            await asyncio.wait(running, timeout=SHUTDOWN_S)
         await server.close()
-        await fleet.close()
+        left = max(0.1, deadline - asyncio.get_running_loop().time())
+        try:
+            await asyncio.wait_for(fleet.close(), left)
+        except asyncio.TimeoutError:
+            log.warning("hubwire serve: the boards' links did not close within %.0f s; stopping anyway", SHUTDOWN_S)
 
 
 def broker_address(where: str) -> Tuple[str, int]:
     """``HOST:PORT`` (or ``HOST``: port 1883)."""
-    host, _, port = where.rpartition(":")
-    if not host or not port.isdigit():
-        return where, 1883
-    return host, int(port)
+    host, port = parse_address(where)
+    return host, port if port is not None else 1883
 
 
 def mqtt_bridge() -> Callable[..., Any]:
@@ -128,7 +151,13 @@ def cmd_serve(args: argparse.Namespace) -> int:
                         format="hubwire serve: %(message)s" if not args.verbose else "%(asctime)s %(message)s")
     logging.getLogger("hubwire.service").setLevel(logging.INFO)
     sock = args.socket or default_serve_socket()
-    bridge = mqtt_bridge() if args.mqtt else None
+    try:
+        broker = settings_from_args(args)
+        if broker is not None:
+            broker.tls_context()  # unreadable certificate or key files: say so now, not on each retry
+    except (OSError, ValueError, ssl.SSLError) as e:
+        raise SystemExit(f"hubwire serve: MQTT settings: {e}") from None
+    bridge = mqtt_bridge() if broker is not None else None
     clients = [dashboard(args)] if args.http is not None else []
     from .store import Store, state_dir
 
@@ -144,8 +173,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
-        await serve(fleet, sock, bridge, args.mqtt, ready=lambda: print(f"READY {sock}", flush=True),
-                    clients=clients, mqtt_id=args.mqtt_id)
+        await serve(fleet, sock, bridge, ready=lambda: print(f"READY {sock}", flush=True),
+                    clients=clients, broker=broker)
 
     try:
         asyncio.run(main())

@@ -12,16 +12,18 @@ import json
 import logging
 import secrets
 import socket
-from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Set
+import ssl
+from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Sequence, Set, Tuple
 
 import aiomqtt
-from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from .board import BoardBridge
+from .inbound import Inbound
+from .reply import Reply
 from .outbox import Outbox
 from .retire import Retired
-from .topics import OFFLINE, ONLINE, BridgeConfig, Topics, dumps
+from .topics import OFFLINE, ONLINE, BridgeConfig, Topics
 
 if TYPE_CHECKING:
     from ..aio import AsyncDevice
@@ -38,6 +40,20 @@ if _client_log.level == logging.NOTSET:
 
 #: small messages go out at once (with Nagle's algorithm a reply waits for the peer's delayed ACK)
 NODELAY = ((socket.IPPROTO_TCP, socket.TCP_NODELAY, 1),)
+
+#: commands waiting for a worker; beyond it they are dropped (and counted)
+INBOUND_QUEUE = 256
+#: commands taken per second, on average, and in one burst; beyond it they are dropped (and counted)
+INBOUND_RATE_HZ = 200.0
+INBOUND_BURST = 200
+#: commands carried out at once (each waits for its board)
+WORKERS = 8
+#: a warning about dropped commands at most this often, seconds
+DROP_LOG_INTERVAL_S = 10.0
+#: messages aiomqtt holds before the bridge takes them (the bridge takes them at once)
+CLIENT_QUEUE = 4 * INBOUND_QUEUE
+#: boards of other services remembered (from their retained descriptors)
+MAX_ELSEWHERE = 4096
 
 
 class BoardLike(Protocol):
@@ -61,14 +77,18 @@ class FleetLike(Protocol):
 
 async def run_bridge(fleet: FleetLike, host: str, port: int = 1883, *, prefix: str = "hubwire",
                      config: Optional[BridgeConfig] = None, username: Optional[str] = None,
-                     password: Optional[str] = None, **settings: Any) -> None:
+                     password: Optional[str] = None, tls_context: Optional[ssl.SSLContext] = None,
+                     reply_prefixes: Sequence[str] = (), **settings: Any) -> None:
     """Bridge ``fleet`` to the MQTT broker at ``host:port`` until cancelled.
 
     ``settings`` are fields of :class:`BridgeConfig` (``discovery_prefix``, ``service_id``,
-    ``max_rate_hz``, ``streams``, ...), or pass a whole ``config``.
+    ``max_rate_hz``, ``streams``, ...), or pass a whole ``config``. ``tls_context``: connect over
+    TLS (``hubwire.service.broker.BrokerSettings.tls_context``); ``reply_prefixes``: where replies
+    may be published (default: under ``prefix``).
     """
     cfg = config or BridgeConfig(prefix=prefix, **settings)
-    await Bridge(fleet, host, port, cfg, username=username, password=password).run()
+    await Bridge(fleet, host, port, cfg, username=username, password=password, tls_context=tls_context,
+                 reply_prefixes=reply_prefixes).run()
 
 
 class Bridge:
@@ -76,14 +96,21 @@ class Bridge:
     has us (tests and the bench wait on it)."""
 
     def __init__(self, fleet: FleetLike, host: str, port: int, config: BridgeConfig, *,
-                 username: Optional[str] = None, password: Optional[str] = None) -> None:
+                 username: Optional[str] = None, password: Optional[str] = None,
+                 tls_context: Optional[ssl.SSLContext] = None, reply_prefixes: Sequence[str] = ()) -> None:
         self.fleet = fleet
         self.host = host
         self.port = port
         self.config = config
         self.username = username
         self.password = password
+        self.tls_context = tls_context
         self.topics = Topics(config.prefix, config.discovery_prefix)
+        #: replies go only under these (a sender must not make the bridge publish anywhere it likes)
+        self.reply_prefixes: Tuple[str, ...] = tuple(
+            p if p.endswith("/") else p + "/" for p in (reply_prefixes or (self.topics.prefix,)))
+        self.inbound: "Inbound[Tuple[aiomqtt.Message, str, str, Optional[str]]]" = Inbound(
+            INBOUND_QUEUE, INBOUND_RATE_HZ, INBOUND_BURST, DROP_LOG_INTERVAL_S, log)
         self.outbox = Outbox(config.event_backlog)
         #: names this run of the bridge in event ids, so ids never repeat across restarts
         self.run_id = secrets.token_hex(4)
@@ -96,22 +123,33 @@ class Bridge:
         #: keys this service published that a board no longer has (their retained topics are cleared)
         self.retired = Retired(self.topics, config.service_id)
         self._tasks: Set["asyncio.Task[Any]"] = set()
+        self._failing = False
+        #: commands refused for their reply topic; when that was last logged
+        self.refusals = 0
+        self._refusal_logged_at: Optional[float] = None
 
     # ---------------------------------------------------------------------------- lifecycle
 
     async def run(self) -> None:
-        watcher = asyncio.get_running_loop().create_task(self._watch_fleet())
+        loop = asyncio.get_running_loop()
+        watcher = loop.create_task(self._watch_fleet())
+        workers = [loop.create_task(self._worker()) for _ in range(WORKERS)]
         try:
             while True:
                 try:
                     await self._session()
                 except aiomqtt.MqttError as e:
-                    log.info("hubwire: broker %s:%d: %s", self.host, self.port, e)
+                    # the first failure of a streak shows without -v (a refused password, a bad certificate)
+                    (log.info if self._failing else log.warning)("hubwire serve: MQTT: broker %s:%d: %s",
+                                                                 self.host, self.port, e)
+                    self._failing = True
                 self.client = None
                 self.connected.clear()
                 await asyncio.sleep(self.config.reconnect_s)
         finally:
             watcher.cancel()
+            for w in workers:
+                w.cancel()
             for b in self.boards.values():
                 b.close()
             for t in list(self._tasks):
@@ -124,9 +162,11 @@ class Bridge:
                                   protocol=aiomqtt.ProtocolVersion.V5, will=will, clean_start=True,
                                   keepalive=self.config.keepalive, username=self.username,
                                   password=self.password, socket_options=NODELAY,
-                                  logger=_client_log) as client:
+                                  tls_context=self.tls_context, logger=_client_log,
+                                  max_queued_incoming_messages=CLIENT_QUEUE) as client:
             self.client = client
             self.connections += 1
+            self._failing = False
             await client.publish(status, ONLINE, qos=1, retain=True)
             for f in self.topics.command_filters():
                 await client.subscribe(f, qos=1)
@@ -143,9 +183,9 @@ class Bridge:
                 for t in done:
                     t.result()
             except asyncio.CancelledError:
-                # a clean stop: say so (the will only covers an unclean end)
+                # a clean stop: say so (a clean disconnect drops the will); the service awaits this
                 try:
-                    await asyncio.wait_for(client.publish(status, OFFLINE, qos=1, retain=True), 2)
+                    await asyncio.wait_for(client.publish(status, OFFLINE, qos=1, retain=True), 1.0)
                 except (aiomqtt.MqttError, asyncio.TimeoutError):
                     pass
                 raise
@@ -216,6 +256,9 @@ class Bridge:
             return True
         except aiomqtt.MqttError:
             return False
+        except (ValueError, TypeError) as e:  # a topic paho refuses: checked before, so a bug
+            log.error("hubwire serve: MQTT: could not publish to %r: %s", topic, e)
+            return False
 
     # ----------------------------------------------------------------------------- commands
 
@@ -233,16 +276,58 @@ class Bridge:
         if parsed is None:
             return
         key, op, channel = parsed
+        if key not in self.boards and key in self.elsewhere:
+            return  # a board of another service on this broker: that one answers
+        self.inbound.offer((msg, key, op, channel))
+
+    async def _worker(self) -> None:
+        while True:
+            msg, key, op, channel = await self.inbound.get()
+            try:
+                await self._command(msg, key, op, channel)
+            except asyncio.CancelledError:
+                raise
+            except Exception as e:  # noqa: BLE001 - one command's bug must not end the worker
+                log.error("hubwire serve: MQTT: %s %s/%s: %s: %s", op, key, channel, type(e).__name__, e)
+
+    async def _command(self, msg: aiomqtt.Message, key: str, op: str, channel: Optional[str]) -> None:
         payload = msg.payload if isinstance(msg.payload, (bytes, bytearray)) else str(msg.payload or "").encode()
         reply = Reply(self, msg.properties, key)
-        bb = self.boards.get(key)
-        if bb is None and key in self.elsewhere:
-            return  # a board of another service on this broker: that one answers
-        if bb is None:
-            self.spawn(reply.error(op, channel, "UnknownBoard",
-                                   f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}"))
+        if reply.refused is not None:
+            await reply.error(op, channel, "BadRequest", reply.refused)
             return
-        self.spawn(bb.command(op, channel, bytes(payload), reply))
+        bb = self.boards.get(key)
+        if bb is None:
+            await reply.error(op, channel, "UnknownBoard",
+                              f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}")
+            return
+        await bb.command(op, channel, bytes(payload), reply)
+
+    def note_refusal(self, why: str, key: str) -> None:
+        """Log a refused command: the first at once, then a count at most every DROP_LOG_INTERVAL_S."""
+        self.refusals += 1
+        now = asyncio.get_running_loop().time()
+        if self._refusal_logged_at is None or now - self._refusal_logged_at >= DROP_LOG_INTERVAL_S:
+            self._refusal_logged_at = now
+            log.warning("hubwire serve: MQTT: BadRequest: %s; the command to %s was refused (%d refused so far)",
+                        why, key, self.refusals)
+
+    def reply_refusal(self, topic: str) -> Optional[str]:
+        """Why the bridge will not publish a reply to ``topic`` (None: it will)."""
+        shown = repr(topic[:80]) + ("..." if len(topic) > 80 else "")
+        if not topic or any(c in topic for c in "+#\0"):
+            return f"reply topic {shown} is empty or has a wildcard or NUL"
+        try:
+            n = len(topic.encode("utf-8"))
+        except UnicodeEncodeError:
+            return "reply topic is not valid UTF-8"
+        if n > 65535:
+            return "reply topic is too long"
+        if not topic.startswith(self.reply_prefixes):
+            return f"reply topic {shown} is outside {', '.join(self.reply_prefixes)} (the reply prefixes)"
+        if self.topics.parse_command(topic) is not None or topic.startswith(f"{self.topics.prefix}/_service/"):
+            return f"reply topic {shown} is a command or status topic of the bridge"
+        return None
 
 
     def _note_descriptor(self, topic: str, payload: Any) -> None:
@@ -256,6 +341,8 @@ class Bridge:
         except (ValueError, TypeError, AttributeError):
             service = None
         if isinstance(service, str) and service != self.config.service_id and key not in self.boards:
+            if len(self.elsewhere) >= MAX_ELSEWHERE and key not in self.elsewhere:
+                self.elsewhere.pop(next(iter(self.elsewhere)))  # the oldest: its service answers UnknownBoard too
             self.elsewhere[key] = service
         else:
             self.elsewhere.pop(key, None)
@@ -264,42 +351,3 @@ class Bridge:
             log.error("hubwire serve: MQTT: board %r is also served by service %r on this broker; give one "
                       "of the boards another device name (each board key must be unique on a broker)",
                       key, service)
-
-
-class Reply:
-    """Where the answer to one command goes: the MQTT 5 response topic (with its correlation data),
-    the ``reply_to`` of an ``rpc`` envelope (MQTT 3.1.1 clients), or, for errors only, the board's
-    ``error`` topic."""
-
-    def __init__(self, bridge: Bridge, props: Optional[Properties], key: str) -> None:
-        self.bridge = bridge
-        self.key = key
-        self.topic: Optional[str] = getattr(props, "ResponseTopic", None) if props is not None else None
-        self.correlation: Optional[bytes] = getattr(props, "CorrelationData", None) if props is not None else None
-        self.rpc_id: Any = None
-        self.is_rpc = False
-
-    def envelope(self, reply_to: Optional[str], rpc_id: Any) -> None:
-        self.is_rpc = True
-        self.rpc_id = rpc_id
-        if self.topic is None:
-            self.topic = reply_to or self.bridge.topics.rpc_reply(self.key)
-
-    async def send(self, body: Dict[str, Any]) -> None:
-        if self.is_rpc:
-            body = {"id": self.rpc_id, **body}
-        if self.topic is None:
-            if body.get("ok") is False:
-                await self.bridge.send(self.bridge.topics.errors(self.key), dumps(body), qos=1)
-            return
-        props = None
-        if self.correlation is not None:
-            props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
-            props.CorrelationData = self.correlation
-        await self.bridge.send(self.topic, dumps(body), qos=1, properties=props)
-
-    async def ok(self, **fields: Any) -> None:
-        await self.send({"ok": True, **fields})
-
-    async def error(self, op: str, channel: Optional[str], kind: str, message: str, **extra: Any) -> None:
-        await self.send({"ok": False, "op": op, "channel": channel, "error": kind, "message": message, **extra})

@@ -11,7 +11,7 @@ from typing import Any, Dict, Optional
 from ..errors import HubwireError, InvalidValue, LinkLost, NakError, Timeout
 
 __all__ = ["PROTOCOL", "socket_path", "default_serve_socket", "board_json", "error_json", "raise_error",
-           "ServiceNotRunning", "ServiceError", "encode", "SYSTEM_SOCKET"]
+           "ServiceNotRunning", "ServiceError", "encode", "SYSTEM_SOCKET", "Usage", "Busy"]
 
 #: version of this protocol; a client refuses a service that speaks another
 PROTOCOL = 1
@@ -27,6 +27,18 @@ class ServiceNotRunning(HubwireError):
     """No ``hubwire serve`` answers on the socket."""
 
     kind = "ServiceNotRunning"
+
+
+class Usage(HubwireError):
+    """A request the protocol does not allow (a field of the wrong type, a ``sub`` id in use)."""
+
+    kind = "Usage"
+
+
+class Busy(HubwireError):
+    """A per-client limit of the service was reached (docs/SERVICE.md "Limits")."""
+
+    kind = "Busy"
 
 
 class ServiceError(HubwireError):
@@ -77,7 +89,11 @@ def default_serve_socket() -> str:
 
 
 def encode(obj: Dict[str, Any]) -> bytes:
-    return (json.dumps(obj, ensure_ascii=False, separators=(",", ":")) + "\n").encode("utf-8")
+    text = json.dumps(obj, ensure_ascii=False, separators=(",", ":")) + "\n"
+    try:
+        return text.encode("utf-8")
+    except UnicodeEncodeError:  # a lone surrogate (a "\\udc80" escape in a request): escaped again
+        return (json.dumps(obj, separators=(",", ":")) + "\n").encode("ascii")
 
 
 def board_json(b: Any) -> Dict[str, Any]:

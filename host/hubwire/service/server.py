@@ -15,18 +15,28 @@ from typing import Any, Awaitable, Callable, Dict, Optional
 
 from .. import __version__
 from ..cli_support import jsonable
-from ..errors import HubwireError, LinkLost, StreamEnded
+from ..errors import HubwireError, InvalidValue, LinkLost, StreamEnded
+from ..wire.messages import NakCode
 from . import durable_ops
 from .fleet import Fleet
-from .protocol import MAX_LINE, PROTOCOL, board_json, encode, error_json
+from .protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json
 from .sockdir import ensure_dir
 
-__all__ = ["Server"]
+__all__ = ["Server", "MAX_SUBSCRIPTIONS", "MAX_PENDING", "MAX_BACKLOG"]
 
 log = logging.getLogger("hubwire.service")
 
-#: bytes waiting for a client before it is taken for gone and disconnected
-MAX_BACKLOG = 4 << 20
+# Per client (docs/SERVICE.md "Limits"): one client cannot make the service hold more than this.
+#: streams, event and board subscriptions at once; one more is answered ``Busy``
+MAX_SUBSCRIPTIONS = 64
+#: requests in flight; the service reads no further request of this client until one is answered
+#: (the client's writes wait), so one client's burst cannot queue ahead of everyone else's
+MAX_PENDING = 32
+#: bytes of answers and pushed samples waiting for a client that does not read: beyond it the
+#: client is sent ``{"error": "Overflow", ...}`` and disconnected
+MAX_BACKLOG = 1 << 20
+#: how long a client disconnected for an overflow has to read what was sent before it is cut off
+OVERFLOW_GRACE_S = 10.0
 
 
 class Server:
@@ -72,15 +82,19 @@ class _Client:
         self.writer = writer
         self.subs: Dict[Any, "asyncio.Task[None]"] = {}
         self.tasks: "set[asyncio.Task[None]]" = set()
+        self._slot = asyncio.Event()  # set when a request in flight finished
 
     def send(self, obj: Dict[str, Any]) -> None:
         if self.writer.is_closing():
             return
-        if self.writer.transport.get_write_buffer_size() > MAX_BACKLOG:
+        waiting = self.writer.transport.get_write_buffer_size()
+        if waiting > MAX_BACKLOG:
             # a client that stopped reading would make the service hold every sample for it
-            log.warning("hubwire serve: a client stopped reading (%d bytes waiting); disconnecting it",
-                        self.writer.transport.get_write_buffer_size())
+            log.warning("hubwire serve: a client stopped reading (%d bytes waiting); disconnecting it", waiting)
+            self.writer.write(encode({"ok": False, "error": "Overflow", "message": (
+                f"more than {MAX_BACKLOG} bytes waited for this client to read them; disconnected")}))
             self.close()
+            asyncio.get_running_loop().call_later(OVERFLOW_GRACE_S, self.writer.transport.abort)
             return
         self.writer.write(encode(obj))
 
@@ -104,12 +118,19 @@ class _Client:
                 msg = json.loads(line)
                 if not isinstance(msg, dict):
                     raise ValueError("a request is a JSON object")
-            except ValueError as e:
+            except (ValueError, RecursionError) as e:
                 self.send({"ok": False, "error": "Usage", "message": f"not a request: {e}"})
                 continue
+            while len(self.tasks) >= MAX_PENDING:
+                self._slot.clear()
+                await self._slot.wait()
             t = asyncio.get_running_loop().create_task(self._answer(msg))
             self.tasks.add(t)
-            t.add_done_callback(self.tasks.discard)
+            t.add_done_callback(self._done)
+
+    def _done(self, t: "asyncio.Task[None]") -> None:
+        self.tasks.discard(t)
+        self._slot.set()
 
     async def _answer(self, msg: Dict[str, Any]) -> None:
         rid = msg.get("id")
@@ -122,6 +143,11 @@ class _Client:
             self.send({"id": rid, "ok": True, **out})
         except asyncio.CancelledError:
             raise
+        except (HubwireError, KeyError) as e:  # documented types (an unknown channel is a KeyError)
+            self.send({"id": rid, **error_json(e)})
+        except (ValueError, TypeError, RecursionError) as e:
+            # what a request's fields did not allow for (the documented errors have classes)
+            self.send({"id": rid, **error_json(Usage(f"{type(e).__name__}: {e}"))})
         except Exception as e:  # noqa: BLE001 - every error goes back to the client that asked
             self.send({"id": rid, **error_json(e)})
         try:
@@ -152,7 +178,11 @@ class _Client:
 
     def _arg(self, dev: Any, msg: Dict[str, Any], key: str) -> Any:
         if "raw" in msg:  # exactly the bytes a client encoded (and checked again when written)
-            return dev.channel(str(msg.get("channel"))).codec.decode(bytes.fromhex(str(msg["raw"])))
+            try:
+                raw = bytes.fromhex(str(msg["raw"]))
+            except ValueError:
+                raise InvalidValue(f"raw must be hex digits, not {str(msg['raw'])[:40]!r}", NakCode.BAD_VALUE) from None
+            return dev.channel(str(msg.get("channel"))).codec.decode(raw)
         return msg.get(key)
 
     async def op_write(self, msg: Dict[str, Any]) -> Dict[str, Any]:
@@ -181,10 +211,20 @@ class _Client:
             t.cancel()
         return {}
 
+    def _check_sub(self, msg: Dict[str, Any]) -> None:
+        """Before a subscription is made: a ``sub`` id of its own, and room for it."""
+        sub = msg.get("sub")
+        if not isinstance(sub, (str, int)) or isinstance(sub, bool) or sub in self.subs:
+            raise Usage("a subscription needs a \"sub\" id of its own (a string or an integer)")
+        if len(self.subs) >= MAX_SUBSCRIPTIONS:
+            raise Busy(f"this client has {MAX_SUBSCRIPTIONS} subscriptions, the most one client may hold; "
+                       "unsubscribe one first")
+
     def _subscribe(self, msg: Dict[str, Any], coro: Awaitable[None]) -> None:
         sub = msg.get("sub")
-        if sub is None or sub in self.subs:
-            raise HubwireError("a subscription needs a \"sub\" id of its own")
+        if not isinstance(sub, (str, int)) or sub in self.subs or len(self.subs) >= MAX_SUBSCRIPTIONS:
+            getattr(coro, "close", lambda: None)()  # checked before; still, never one too many
+            raise Busy("no room for this subscription")
         t: "asyncio.Task[None]" = asyncio.ensure_future(coro)
         self.subs[sub] = t
 
@@ -194,6 +234,7 @@ class _Client:
         t.add_done_callback(done)
 
     async def op_boards(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        self._check_sub(msg)
         sub = msg.get("sub")
         only = msg.get("board")
         key = self.fleet.resolve(str(only)).key if only is not None else None
@@ -206,12 +247,20 @@ class _Client:
         return {"boards": [board_json(b) for b in self.fleet.boards() if key is None or b.key == key]}
 
     async def op_stream(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        self._check_sub(msg)
         dev = self._device(msg)
         key = self.fleet.resolve(str(msg.get("board"))).key
-        interval = int(msg.get("interval_ms", 100))
+        interval = msg.get("interval_ms", 100)
+        if not isinstance(interval, (int, float)) or isinstance(interval, bool) or not 0 < interval <= 3_600_000:
+            raise Usage(f"interval_ms is a number of milliseconds, not {interval!r}")
+        interval = int(interval)
         st = dev.stream(str(msg.get("channel")), interval_ms=interval, meta=True)
         await st.open()  # errors (not streamable, refused) go back as the answer
-        self._subscribe(msg, self._samples(msg.get("sub"), key, st, interval))
+        try:
+            self._subscribe(msg, self._samples(msg.get("sub"), key, st, interval))
+        except HubwireError:  # another request took the last place meanwhile
+            await st.aclose()
+            raise
         return {"granted_ms": st.granted_ms}
 
     async def _samples(self, sub: Any, key: str, st: Any, interval: int) -> None:
@@ -241,11 +290,14 @@ class _Client:
         return durable_ops.notify(self.fleet, msg)
 
     async def op_events(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        self._check_sub(msg)
         if self.fleet.store is not None:  # events with ids, and a resume point (``after``)
             return durable_ops.events(self, msg)
         dev = self._device(msg)
         key = self.fleet.resolve(str(msg.get("board"))).key
-        names = [str(n) for n in msg.get("names") or []]
+        names = msg.get("names") or []
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise Usage("names is a list of event channel names")
         evs = dev.events(*names)  # listening from now on, before the answer goes out
         self._subscribe(msg, self._events(msg.get("sub"), key, dev, evs, names))
         return {}

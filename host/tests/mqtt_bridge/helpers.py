@@ -114,7 +114,7 @@ class Watcher:
         self.retained: Dict[str, bool] = {}
         self.changed = asyncio.Event()
         self.replies: Dict[bytes, "asyncio.Future[Any]"] = {}
-        self.reply_topic = f"test/replies/{uuid.uuid4().hex}"
+        self.reply_topic = f"hubwire/replies/{uuid.uuid4().hex}"  # under the bridge's reply prefix
         self._task = asyncio.get_running_loop().create_task(self._read())
 
     async def _read(self) -> None:

@@ -65,13 +65,13 @@ def test_write_read_call_with_replies(broker: Broker, emulators, cache_dir: str)
                 # each write applied exactly once (the sketch counts its writes from the hub)
                 assert await w.request("hubwire/rover/read/applied", "") == {"ok": True, "value": 3}
             # an MQTT 3.1.1 client: the rpc envelope names the reply topic and an id
-            async with watcher(broker.port, "v311/replies", v311=True) as old:
+            async with watcher(broker.port, "hubwire/v311/replies", v311=True) as old:
                 await old.client.publish("hubwire/rover/rpc", json.dumps(
-                    {"op": "set", "channel": "right", "value": -0.25, "id": 7, "reply_to": "v311/replies"}), qos=1)
+                    {"op": "set", "channel": "right", "value": -0.25, "id": 7, "reply_to": "hubwire/v311/replies"}), qos=1)
                 await old.client.publish("hubwire/rover/rpc", json.dumps(
-                    {"op": "read", "channel": "right", "id": "r2", "reply_to": "v311/replies"}), qos=1)
-                await old.wait_for(lambda: len(old.on("v311/replies")) == 2, 10, "two rpc replies")
-                assert sorted(old.on("v311/replies"), key=lambda r: str(r["id"])) == [
+                    {"op": "read", "channel": "right", "id": "r2", "reply_to": "hubwire/v311/replies"}), qos=1)
+                await old.wait_for(lambda: len(old.on("hubwire/v311/replies")) == 2, 10, "two rpc replies")
+                assert sorted(old.on("hubwire/v311/replies"), key=lambda r: str(r["id"])) == [
                     {"id": 7, "ok": True}, {"id": "r2", "ok": True, "value": -0.25}]
         await fleet.close()
     run(main())

@@ -100,7 +100,8 @@ def test_two_services_on_one_broker_one_client_commands_both(broker: Broker, tmp
             env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
                        PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
             services.append(Serve(str(boards), sock, env, str(tmp_path / f"serve-{name}.log"),
-                                  ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", f"hub-{name}"]))
+                                  ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", f"hub-{name}",
+                                   "--mqtt-reply-prefix", "replies/"]))
             services[-1].start()
             services[-1].wait_state(key, "ready")
 
