@@ -56,7 +56,7 @@ class FakeDevice:
         os.write(self.master, encode_frame(t, seq, cid, payload))
 
     def _hello(self, reply: bool) -> None:
-        flags = m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0)
+        flags = m.FLAG_DEVICE | m.FLAG_SEQ_RULES | (m.FLAG_REPLY if reply else 0)
         h = m.Hello(self.version, flags, 0x1234567, self.max_payload, 250, self.hash, len(self.descriptor),
                     digest=self.digest)
         self._send(m.HELLO, 0, 0, h.pack())

@@ -107,7 +107,7 @@ class LargeDevice(PtyPeer):
             f = whole
         if f.type == m.HELLO:
             if not m.Hello.unpack(f.payload).is_reply:
-                h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_REPLY, 0x2468ACE, self.max_payload, 250,
+                h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_SEQ_RULES | m.FLAG_REPLY, 0x2468ACE, self.max_payload, 250,
                             m.fnv1a32(self.descriptor), len(self.descriptor))
                 self.send(m.HELLO, 0, 0, h.pack())
         elif f.type == m.CHUNK:

@@ -115,7 +115,7 @@ class MissionDevice(PtyPeer):
     # --------------------------------------------------------------------------- frames
 
     def _hello(self, reply: bool) -> None:
-        h = m.Hello(1, m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0), self.nonce, self.max_payload, 250,
+        h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_SEQ_RULES | (m.FLAG_REPLY if reply else 0), self.nonce, self.max_payload, 250,
                     m.fnv1a32(self.descriptor), len(self.descriptor), digest=descriptor_digest(self.descriptor))
         self.send(m.HELLO, 0, 0, h.pack())
 

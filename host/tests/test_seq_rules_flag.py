@@ -13,11 +13,11 @@ from fakedevice import FakeDevice
 WARNING = "older than its sequence rules"
 
 
-class RulesDevice(FakeDevice):
-    """The fake device as a board of this version announces itself."""
+class OldDevice(FakeDevice):
+    """The fake device as a board built with a library before the sequence rules announces itself."""
 
     def _hello(self, reply: bool) -> None:
-        flags = m.FLAG_DEVICE | m.FLAG_SEQ_RULES | (m.FLAG_REPLY if reply else 0)
+        flags = m.FLAG_DEVICE | (m.FLAG_REPLY if reply else 0)
         h = m.Hello(self.version, flags, 0x1234567, self.max_payload, 250, self.hash, len(self.descriptor),
                     digest=self.digest)
         self._send(m.HELLO, 0, 0, h.pack())
@@ -25,7 +25,7 @@ class RulesDevice(FakeDevice):
 
 def test_a_board_without_the_flag_is_named_once(cache_dir: str, caplog: Any) -> None:
     caplog.set_level(logging.WARNING, logger="hubwire")
-    with FakeDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
+    with OldDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
         dev.read("x")
         dev.read("x")
     lines = [r.getMessage() for r in caplog.records if WARNING in r.getMessage()]
@@ -34,7 +34,7 @@ def test_a_board_without_the_flag_is_named_once(cache_dir: str, caplog: Any) -> 
 
 def test_a_board_with_the_flag_is_not(cache_dir: str, caplog: Any) -> None:
     caplog.set_level(logging.WARNING, logger="hubwire")
-    with RulesDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
+    with FakeDevice() as fake, hubwire.connect(fake.path, cache_dir=cache_dir) as dev:
         dev.read("x")
     assert not [r for r in caplog.records if WARNING in r.getMessage()]
 
