@@ -88,6 +88,14 @@ class Transactions:
         with self.lock:
             self.rules.device_rebooted()
 
+    def resume(self, acked: Optional[int], head: Optional[Tuple[int, int]]) -> None:
+        """Go on from an earlier run of the hub (:mod:`.resume`): its seq rules, and the (seq, id)
+        of its event in flight held for it (:meth:`let_go` it if that event is not sent again)."""
+        with self.lock:
+            self.rules.resumed(acked, None if head is None else head[0])
+            if head is not None:
+                self.held[head] = m.EVENT
+
     # ----------------------------------------------------------------------- control right
 
     def claim_control(self, owner: str) -> bool:
@@ -247,7 +255,7 @@ class Transactions:
         """``tries``, and for a control in fragments one more per fragment: the device keeps what each
         try brought (PROTOCOL.md 12.4), so a long value needs tries in proportion to its length."""
         frames = p.wire.count(0)
-        return self.core.tries + (frames if p.type == m.CONTROL and frames > 1 else 0)
+        return int(self.core.tries) + (frames if p.type == m.CONTROL and frames > 1 else 0)
 
     def verdict(self, p: Pending, a: Frame, what: str) -> Optional[Frame]:
         """The answer to return; None for a NOT_LINKED NAK to ask again; NakError for the others."""
