@@ -170,7 +170,7 @@ def test_hub_events_survive_kill9_of_the_service(serve: Serve, soak: Emulator) -
 
     def read(ch: str) -> int:
         r = c.request("read", board="soak", channel=ch)
-        assert "value" in r, r
+        assert "value" in r, (r, serve.log_text()[-3000:])
         return int(r["value"])
     wait_for(lambda: read("tick_last") == n, 60, f"tick {n} applied")
     counts = {ch: read(ch) for ch in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")}
@@ -205,7 +205,7 @@ def test_notify_when_full_is_refused_and_the_kept_ones_all_arrive(serve: Serve, 
 
     def read(ch: str) -> int:
         r = c.request("read", board="soak", channel=ch)
-        assert "value" in r, r
+        assert "value" in r, (r, serve.log_text()[-3000:])
         return int(r["value"])
     wait_for(lambda: read("tick_last") == last, 120, f"tick {last} applied")
     counts = {ch: read(ch) for ch in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")}
