@@ -79,12 +79,9 @@ class SessionCore:
         self.hub = HubSide(self, hub if hub is not None else HubChannels())
         # hub_session: the nonce to say hello with, and what a resumed session left (session/resume.py)
         self.link = Link(transport, self.loop, self.stats, heartbeat_ms, self,
-                         None if hub_session is None else hub_session.nonce)
+                         hub_session.nonce if hub_session else None)
         self.tx = Transactions(self)
-        if hub_session is not None and hub_session.resumed:
-            head = hub_session.head
-            self.tx.resume(hub_session.acked, None if head is None else (head[1], head[2]))
-            self.hub.resumed_head = head
+        self.hub.resume(hub_session)
         self.discovery = Discovery(self, DescriptorCache(cache_dir))
         self.events = Events(self)
         self.streams = Streams(self)

@@ -36,6 +36,7 @@ from ..wire import messages as m
 from ..wire.frame import Frame
 from ..wire.messages import NakCode
 from .hub_answers import HubAnswers
+from .resume import HubSession
 
 __all__ = ["HubSide", "HUB_EVENT_QUEUE_LIMIT", "BIND_REPORT_VERSION"]
 
@@ -336,6 +337,12 @@ class HubSide:
             token = None if self.keeper is None else self.keeper.add(name, payload)
             self.queue.append(_Queued(name, payload, token))
         self.loop.call_soon_threadsafe(self.kick)
+
+    def resume(self, hs: Optional[HubSession]) -> None:
+        """Go on from where an earlier run of the hub left this hub session, if ``hs`` says it did."""
+        if hs is not None and hs.resumed:
+            self.core.tx.resume(hs.acked, None if hs.head is None else hs.head[1:])
+            self.resumed_head = hs.head
 
     def restore(self, kept: List[Tuple[Any, str, bytes]]) -> None:
         """Queue (token, name, payload) events a keeper kept from an earlier session, ahead of any
