@@ -31,19 +31,19 @@ class _HubKeeper:
         return self.store.hub_add(self.key, name, payload)
 
     def sent(self, token: Any, seq: int, id: int) -> None:
-        if self.port is None:
-            return
-        try:
+        if self.port is not None:  # (raises when it cannot: the event then waits)
             self.store.hub_sent(self.port, int(token), seq, id)
-        except Exception as e:  # noqa: BLE001 - sent all the same: at least once if the service restarts
-            log.error("hubwire serve: seq of a hub event for %s not stored: %s", self.key, clip(str(e), 200))
 
     def done(self, token: Any, acked: Optional[int]) -> None:
         self.store.hub_done(int(token), self.port, acked)
 
     def nonce(self, nonce: int) -> None:
-        if self.port is not None:
+        if self.port is None:
+            return
+        try:
             self.store.hub_session_new(self.port, nonce, fresh=False)
+        except Exception as e:  # noqa: BLE001 - the port opens all the same (at least once after a restart)
+            log.error("hubwire serve: hub nonce for %s not stored: %s", self.key, clip(str(e), 200))
 
 
 class _EventLog(EventSink):

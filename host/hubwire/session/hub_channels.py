@@ -15,7 +15,7 @@ the bind report (``C`` id 0) and the queue of hub events (``!``) to the device.
   device and hub sessions, and only for names it listed with access ``e``.
 - Persistence (optional): a ``keeper`` with ``add(name, payload) -> token`` (called as notify()
   queues an event; it may refuse by raising), ``sent(token, seq, id)`` (the event's seq and id,
-  before it first goes out), ``done(token, acked)`` (the device answered it: ``acked`` its seq on
+  before it first goes out; if it raises, the event waits and is tried again), ``done(token, acked)`` (the device answered it: ``acked`` its seq on
   ACK, else None) and ``nonce(n)`` (the link drew a new hub nonce). Events a keeper kept from an
   earlier session go back in the queue with :meth:`HubSide.restore`; the one in flight when that
   session ended goes out with its seq and id again when the session is resumed (:mod:`.resume`).
@@ -215,6 +215,8 @@ class HubSide:
             ev = self.queue[0]
             exp = next((c for c in desc.hub if c.name == ev.name), None)
             if exp is None or "e" not in exp.access:
+                if ev.seq is not None:  # (its seq stays skipped: the device may remember it)
+                    self.core.tx.let_go(ev.seq, ev.id, None)
                 self._done(self.queue.popleft())
                 self.core.stats.hub_events_skipped += 1
                 log.warning("hubwire: %s takes no event %s: not sent", desc.name, clip(ev.name))
@@ -224,15 +226,27 @@ class HubSide:
                 ev.seq = None
             if ev.seq is None:
                 ev.seq = self.core.tx.hold(m.EVENT, exp.id)
-                if ev.seq is None:
+                if ev.seq is None or not self._kept(ev, ev.seq, exp.id):
+                    ev.seq = None
                     self._kick_in_a_while()  # no seq free: every one in use (bounded, so not for long)
                     return
-                if self.keeper is not None and ev.token is not None:
-                    self.keeper.sent(ev.token, ev.seq, exp.id)  # before the wire: a restart resends it so
             ev.id = exp.id
             self.core.link.send_frame(m.EVENT, ev.seq, ev.id, ev.payload)
             self._head_out = True
             return
+
+    def _kept(self, ev: _Queued, seq: int, id: int) -> bool:
+        """The keeper stores the seq before the event first goes out (session/resume.py); if it
+        cannot, the event waits: a restarted hub must know every seq the device may remember."""
+        if self.keeper is None or ev.token is None:
+            return True
+        try:
+            self.keeper.sent(ev.token, seq, id)
+            return True
+        except Exception as e:  # noqa: BLE001 - a full disk: tried again a retry interval later
+            self.core.tx.let_go(seq, id, None)
+            log.error("hubwire: event %s not sent: its seq was not kept: %s", clip(ev.name), clip(str(e), 200))
+            return False
 
     def _arm(self) -> None:
         if self._timer is None and (self._bind is not None or self._head_out):

@@ -189,3 +189,33 @@ async def until_async(dev: Any, channel: str, value: int, timeout: float = 10) -
     while await dev.read(channel) != value:
         assert asyncio.get_running_loop().time() < deadline, f"{channel} is not {value} after {timeout} s"
         await asyncio.sleep(0.02)
+
+
+def test_hub_event_waits_while_its_seq_cannot_be_kept(soak: Emulator, tmp_path: Any,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """A hub event goes out only once its seq is on disk (a restart must know what the board may
+    remember): while the write fails it waits, then goes out once."""
+    async def run() -> None:
+        store = Store(str(tmp_path / "state"))
+        port = soak.link
+        hs = durable.hub_session(store, port, resume=True)
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        durable.attach(store, "soak", dev, port)
+        fails = []
+        hub_sent = store.hub_sent
+
+        def full_disk(*a: Any) -> None:
+            if len(fails) < 3:
+                fails.append(a)
+                raise OSError("database or disk is full")
+            hub_sent(*a)
+        monkeypatch.setattr(store, "hub_sent", full_disk)
+        dev.notify("tick", 1)
+        await dev.wait_notified(timeout=10)
+        assert len(fails) == 3, "tried again after each failure"
+        assert [await dev.read(c) for c in ("ticks", "tick_last", "tick_twice")] == [1, 1, 0]
+        got = store.hub_session(port)
+        assert got is not None and got.acked is not None and got.head is None, got
+        await dev.close()
+        store.close()
+    asyncio.run(run())
