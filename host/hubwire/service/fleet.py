@@ -125,6 +125,8 @@ class Fleet:
         self._descriptors: Dict[str, Descriptor] = {}
         #: what survives a restart (a :class:`~.store.Store`), or None
         self.store = store
+        #: ports whose kept hub session the next connection resumes (loaded once, then only shrinks)
+        self._resumable: Optional[Set[str]] = None
 
     # --------------------------------------------------------------------------- the FLEET.md API
 
@@ -275,8 +277,14 @@ class Fleet:
         a = self._attempts[real]
         try:
             # a transport of its own: the port itself, never routed through a service (this one)
+            # the first session on a port since the service started resumes the hub session kept
+            # for it (the same hub nonce: the device keeps its duplicate memories, durable.py)
+            if self._resumable is None:
+                self._resumable = set(self.store.hub_session_ports()) if self.store is not None else set()
+            hs = durable.hub_session(self.store, info.path, info.path in self._resumable)
             dev = await connect(transport=SerialTransport(info.path), timeout=self.connect_timeout,
-                                cache_dir=self.cache_dir)
+                                cache_dir=self.cache_dir, hub_session=hs)
+            self._resumable.discard(info.path)
         except asyncio.CancelledError:
             raise
         except Exception as e:  # noqa: BLE001 - any port that is no Hubwire board
@@ -309,7 +317,7 @@ class Fleet:
         self._descriptors[board.key] = dev.descriptor
         self._by_port[real] = board
         # first: the events that came before it are stored (kept hub events go out before new ones)
-        durable.attach(self.store, board.key, dev)
+        durable.attach(self.store, board.key, dev, info.path)
         # the service always listens, so an event nobody else hears is counted (and kept by the store)
         dev.on("*", lambda _ev, b=board: setattr(b, "events", b.events + 1))
         for kind in ("link_lost", "link_restored", "reconnect"):

@@ -12,6 +12,10 @@ one SQLite file in the service's state directory.
   it missed).
 - Per board: the last id handed out and the device session nonce and seq of its last event, to
   recognise the device's retry of an event the service stored but died before acknowledging.
+- Per port: the hub nonce the service said hello with, the seq of the last hub event the device
+  acknowledged and the (row, seq, id) of the one in flight, written before it goes out: a restarted
+  service resumes that hub session, so the device's duplicate memory holds (session/resume.py).
+  At most ``board_limit`` ports (the one used longest ago forgotten first).
 
 Durability: WAL with ``synchronous=NORMAL``: a committed row survives the process being killed
 (SIGKILL included), not necessarily a power loss. Everything runs on the service's loop.
@@ -29,7 +33,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tupl
 from ..errors import HubwireError
 from ..session.hub_channels import HUB_EVENT_QUEUE_LIMIT
 
-__all__ = ["Store", "StoredEvent", "StoreFull", "state_dir", "SYSTEM_STATE_DIR",
+__all__ = ["Store", "StoredEvent", "StoreFull", "HubSessionRow", "state_dir", "SYSTEM_STATE_DIR",
            "EVENT_KEEP", "EVENT_AGE", "HUB_EVENT_LIMIT", "BOARD_LIMIT"]
 
 #: where the system service keeps its state (systemd StateDirectory=hubwire)
@@ -51,6 +55,8 @@ CREATE TABLE IF NOT EXISTS events (board TEXT NOT NULL, id INTEGER NOT NULL, nam
 CREATE TABLE IF NOT EXISTS hub_events (id INTEGER PRIMARY KEY AUTOINCREMENT, board TEXT NOT NULL,
     name TEXT NOT NULL, payload BLOB NOT NULL);
 CREATE INDEX IF NOT EXISTS hub_events_board ON hub_events (board, id);
+CREATE TABLE IF NOT EXISTS hub_sessions (port TEXT PRIMARY KEY, nonce INTEGER NOT NULL, acked INTEGER,
+    row INTEGER, seq INTEGER, id INTEGER, used REAL NOT NULL);
 """
 
 
@@ -65,6 +71,15 @@ class StoredEvent:
     name: str
     raw: bytes
     seq: int
+
+
+@dataclass(frozen=True)
+class HubSessionRow:
+    """The hub session last used on a port: its hub nonce, the seq of the last hub event the device
+    acknowledged, and (row, seq, id) of the hub event in flight."""
+    nonce: int
+    acked: Optional[int]
+    head: Optional[Tuple[int, int, int]]
 
 
 def state_dir(given: Optional[str] = None) -> str:
@@ -170,9 +185,43 @@ class Store:
                                   (key, name, payload))
             return int(cur.lastrowid or 0)
 
-    def hub_done(self, row: int) -> None:
-        """The device answered hub event ``row``: forget it."""
-        self.db.execute("DELETE FROM hub_events WHERE id=?", (row,))
+    def hub_done(self, row: int, port: Optional[str] = None, acked: Optional[int] = None) -> None:
+        """The device answered hub event ``row`` (sent on ``port``; ``acked``: its seq if it was an
+        ACK): forget it, and keep what the device now remembers."""
+        with self._txn():
+            self.db.execute("DELETE FROM hub_events WHERE id=?", (row,))
+            if port is not None:
+                self.db.execute("UPDATE hub_sessions SET acked=COALESCE(?, acked), row=NULL, seq=NULL, id=NULL "
+                                "WHERE port=? AND row=?", (acked, port, row))
+
+    # ----------------------------------------------------------------------- hub sessions
+
+    def hub_session(self, port: str) -> Optional[HubSessionRow]:
+        """The hub session last used on ``port``, if any."""
+        r = self.db.execute("SELECT nonce, acked, row, seq, id FROM hub_sessions WHERE port=?", (port,)).fetchone()
+        if r is None:
+            return None
+        head = (int(r[2]), int(r[3]), int(r[4])) if None not in (r[2], r[3], r[4]) else None
+        return HubSessionRow(int(r[0]), None if r[1] is None else int(r[1]), head)
+
+    def hub_session_ports(self) -> List[str]:
+        return [str(p) for (p,) in self.db.execute("SELECT port FROM hub_sessions")]
+
+    def hub_session_new(self, port: str, nonce: int, *, fresh: bool = True) -> None:
+        """``port`` says hello with hub ``nonce`` from now on; ``fresh``: a new hub session (nothing
+        the device remembers of an earlier one counts), else only the nonce changes."""
+        with self._txn():
+            if fresh or self.db.execute("UPDATE hub_sessions SET nonce=?, used=? WHERE port=?",
+                                        (nonce, self.clock(), port)).rowcount == 0:
+                self.db.execute("INSERT OR REPLACE INTO hub_sessions (port, nonce, used) VALUES (?, ?, ?)",
+                                (port, nonce, self.clock()))
+            self.db.execute("DELETE FROM hub_sessions WHERE port IN (SELECT port FROM hub_sessions "
+                            "ORDER BY used DESC LIMIT -1 OFFSET ?)", (self.board_limit,))
+
+    def hub_sent(self, port: str, row: int, seq: int, id: int) -> None:
+        """Hub event ``row`` goes out on ``port`` with ``seq`` and ``id`` (and every retry with them)."""
+        self.db.execute("UPDATE hub_sessions SET row=?, seq=?, id=?, used=? WHERE port=?",
+                        (row, seq, id, self.clock(), port))
 
     def hub_pending(self, key: str) -> List[Tuple[int, str, bytes]]:
         """(row, name, payload) of every hub event still waiting for ``key``, oldest first."""
@@ -237,4 +286,5 @@ class Store:
         (ev,) = self.db.execute("SELECT COUNT(*) FROM events").fetchone()
         (hub,) = self.db.execute("SELECT COUNT(*) FROM hub_events").fetchone()
         (boards,) = self.db.execute("SELECT COUNT(*) FROM boards").fetchone()
-        return {"events": ev, "hub_events": hub, "boards": boards}
+        (ports,) = self.db.execute("SELECT COUNT(*) FROM hub_sessions").fetchone()
+        return {"events": ev, "hub_events": hub, "boards": boards, "hub_sessions": ports}

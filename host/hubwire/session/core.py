@@ -27,6 +27,7 @@ from .events import Events
 from .hub_channels import HubSide
 from .link import HELLO_INTERVAL, HelloOutcome, Link
 from .missions import Missions
+from .resume import HubSession
 from .records import LinkHealth, State, Stats
 from .slots import DEFAULT_MAX_IN_FLIGHT
 from .streams import Streams
@@ -50,7 +51,7 @@ class SessionCore:
     def __init__(self, transport: Transport, *, dispatch: Any, connect_timeout: float = 5.0,
                  heartbeat_ms: int = 250, retry_timeout: float = 0.1, tries: int = 5, cache_dir: Any = None,
                  progress: Optional[Callable[[int, int], None]] = None, hub: Optional[HubChannels] = None,
-                 max_in_flight: int = DEFAULT_MAX_IN_FLIGHT) -> None:
+                 max_in_flight: int = DEFAULT_MAX_IN_FLIGHT, hub_session: Optional[HubSession] = None) -> None:
         self.loop = asyncio.get_running_loop()
         self._loop_thread = threading.current_thread()
         self.url = transport.url
@@ -76,8 +77,11 @@ class SessionCore:
         #: the hub's own channels for this device (declared beforehand: ``hub_declared``)
         self.hub_declared = hub is not None
         self.hub = HubSide(self, hub if hub is not None else HubChannels())
-        self.link = Link(transport, self.loop, self.stats, heartbeat_ms, self)
+        # hub_session: the nonce to say hello with, and what a resumed session left (session/resume.py)
+        self.link = Link(transport, self.loop, self.stats, heartbeat_ms, self,
+                         hub_session.nonce if hub_session else None)
         self.tx = Transactions(self)
+        self.hub.resume(hub_session)
         self.discovery = Discovery(self, DescriptorCache(cache_dir))
         self.events = Events(self)
         self.streams = Streams(self)
@@ -343,6 +347,9 @@ class SessionCore:
         if was_up:
             log.info("hubwire: link to %s lost (%s)", self.url, why)
             self._lost_callbacks()
+
+    def hub_nonce_changed(self) -> None:
+        self.hub.nonce_changed()
 
     def port_down(self) -> None:
         if self.link.linked or self.state is State.READY:

@@ -14,8 +14,11 @@ the bind report (``C`` id 0) and the queue of hub events (``!``) to the device.
   anything else in flight. Sent only once the device acked the bind report in this pairing of
   device and hub sessions, and only for names it listed with access ``e``.
 - Persistence (optional): a ``keeper`` with ``add(name, payload) -> token`` (called as notify()
-  queues an event; it may refuse by raising) and ``done(token)`` (the device answered it); events a
-  keeper kept from an earlier session go back in the queue with :meth:`HubSide.restore`.
+  queues an event; it may refuse by raising), ``sent(token, seq, id)`` (the event's seq and id,
+  before it first goes out; if it raises, the event waits and is tried again), ``done(token, acked)`` (the device answered it: ``acked`` its seq on
+  ACK, else None) and ``nonce(n)`` (the link drew a new hub nonce). Events a keeper kept from an
+  earlier session go back in the queue with :meth:`HubSide.restore`; the one in flight when that
+  session ended goes out with its seq and id again when the session is resumed (:mod:`.resume`).
 """
 from __future__ import annotations
 
@@ -33,6 +36,7 @@ from ..wire import messages as m
 from ..wire.frame import Frame
 from ..wire.messages import NakCode
 from .hub_answers import HubAnswers
+from .resume import HubSession
 
 __all__ = ["HubSide", "HUB_EVENT_QUEUE_LIMIT", "BIND_REPORT_VERSION"]
 
@@ -80,6 +84,8 @@ class HubSide:
         #: optional persistence of the queue (see the module docs)
         self.keeper: Any = None
         self._probe: Optional["asyncio.Task[None]"] = None  # a read that lets controls be numbered again
+        #: (token, seq, id) of the event a resumed session had in flight (session/resume.py)
+        self.resumed_head: Optional[Tuple[Any, int, int]] = None
         #: answers the device's own R / C / J
         self.answers = HubAnswers(core, channels)
         channels.add_listener(self)
@@ -209,6 +215,8 @@ class HubSide:
             ev = self.queue[0]
             exp = next((c for c in desc.hub if c.name == ev.name), None)
             if exp is None or "e" not in exp.access:
+                if ev.seq is not None:  # (its seq stays skipped: the device may remember it)
+                    self.core.tx.let_go(ev.seq, ev.id, None)
                 self._done(self.queue.popleft())
                 self.core.stats.hub_events_skipped += 1
                 log.warning("hubwire: %s takes no event %s: not sent", desc.name, clip(ev.name))
@@ -218,13 +226,27 @@ class HubSide:
                 ev.seq = None
             if ev.seq is None:
                 ev.seq = self.core.tx.hold(m.EVENT, exp.id)
-                if ev.seq is None:
+                if ev.seq is None or not self._kept(ev, ev.seq, exp.id):
+                    ev.seq = None
                     self._kick_in_a_while()  # no seq free: every one in use (bounded, so not for long)
                     return
             ev.id = exp.id
             self.core.link.send_frame(m.EVENT, ev.seq, ev.id, ev.payload)
             self._head_out = True
             return
+
+    def _kept(self, ev: _Queued, seq: int, id: int) -> bool:
+        """The keeper stores the seq before the event first goes out (session/resume.py); if it
+        cannot, the event waits: a restarted hub must know every seq the device may remember."""
+        if self.keeper is None or ev.token is None:
+            return True
+        try:
+            self.keeper.sent(ev.token, seq, id)
+            return True
+        except Exception as e:  # noqa: BLE001 - a full disk: tried again a retry interval later
+            self.core.tx.let_go(seq, id, None)
+            log.error("hubwire: event %s not sent: its seq was not kept: %s", clip(ev.name), clip(str(e), 200))
+            return False
 
     def _arm(self) -> None:
         if self._timer is None and (self._bind is not None or self._head_out):
@@ -272,7 +294,7 @@ class HubSide:
                 return True
             ev = self.queue.popleft()
             self.core.tx.let_go(f.seq, f.id, f)
-            self._done(ev)
+            self._done(ev, f.type == m.ACK)
             if not self.queue:
                 self.core.wake()  # whoever waits for the queue to empty (wait_notified)
             if f.type == m.ACK:
@@ -330,16 +352,34 @@ class HubSide:
             self.queue.append(_Queued(name, payload, token))
         self.loop.call_soon_threadsafe(self.kick)
 
+    def resume(self, hs: Optional[HubSession]) -> None:
+        """Go on from where an earlier run of the hub left this hub session, if ``hs`` says it did."""
+        if hs is not None and hs.resumed:
+            self.core.tx.resume(hs.acked, None if hs.head is None else hs.head[1:])
+            self.resumed_head = hs.head
+
     def restore(self, kept: List[Tuple[Any, str, bytes]]) -> None:
         """Queue (token, name, payload) events a keeper kept from an earlier session, ahead of any
-        new one (the keeper has them already)."""
+        new one (the keeper has them already). The first one keeps its seq and id if it is the
+        event a resumed session had in flight (call on the loop)."""
+        head, self.resumed_head = self.resumed_head, None
         with self._lock:
-            self.queue.extendleft(_Queued(n, p, t) for t, n, p in reversed(kept))
+            items = [_Queued(n, p, t) for t, n, p in kept]
+            if head is not None and items and items[0].token == head[0] and not self.queue:
+                items[0].seq, items[0].id = head[1], head[2]
+            elif head is not None:
+                self.core.tx.let_go(head[1], head[2], None)  # gone meanwhile: its seq stays skipped
+            self.queue.extendleft(reversed(items))
         self.loop.call_soon_threadsafe(self.kick)
 
-    def _done(self, ev: _Queued) -> None:
+    def nonce_changed(self) -> None:
+        """The link drew a new hub nonce: the keeper keeps it before the hello goes out."""
+        if self.keeper is not None:
+            self.keeper.nonce(self.core.link.nonce)
+
+    def _done(self, ev: _Queued, acked: bool = False) -> None:
         if self.keeper is not None and ev.token is not None:
-            self.keeper.done(ev.token)
+            self.keeper.done(ev.token, ev.seq if acked else None)
 
 
 def mismatch(exp: Channel, hc: Optional[HubChannel], code: int, device: str) -> str:

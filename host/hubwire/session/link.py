@@ -70,11 +70,11 @@ class Link:
     """Transport + framing + handshake + heartbeats of one session; reports to ``owner``.
 
     ``owner`` provides ``handle(frame, now)`` (every valid frame but hellos and heartbeats),
-    ``on_hello(outcome)``, ``link_down(why)`` and ``port_down()``.
+    ``on_hello(outcome)``, ``link_down(why)``, ``port_down()`` and ``hub_nonce_changed()``.
     """
 
     def __init__(self, transport: Transport, loop: asyncio.AbstractEventLoop, stats: Stats,
-                 heartbeat_ms: int, owner: Any) -> None:
+                 heartbeat_ms: int, owner: Any, nonce: Optional[int] = None) -> None:
         self.transport = transport
         self.loop = loop
         #: every write goes through it: a large message's fragments are paced on a fast line
@@ -82,7 +82,8 @@ class Link:
         self.stats = stats
         self.heartbeat_ms = heartbeat_ms
         self.owner = owner
-        self.nonce = new_nonce()
+        #: drawn here unless given (a hub resuming its session after a restart: session/resume.py)
+        self.nonce = new_nonce() if nonce is None else nonce
         self.decoder = FrameDecoder(HUB_MAX_PAYLOAD)
         #: large messages from the device come in fragments (PROTOCOL.md 12)
         self.reassembler = Reassembler(self.decoder)
@@ -200,6 +201,7 @@ class Link:
         # A re-opened port is a new connection: a new hub nonce (PROTOCOL.md 4.2). A board that lost
         # power mixes it into its own nonce, which is how its new boot is told from the old one.
         self.nonce = new_nonce()
+        self.owner.hub_nonce_changed()  # (kept before the hello goes out)
         self.decoder.reset()
         self.reassembler.reset()
         self._hello_tick()

@@ -14,7 +14,8 @@ counting alone does not prevent it; :class:`SeqRules` skips:
 - for a ``!``: the seq of the last event acknowledged and of the previous event;
 - for every kind: a (seq, id) still in flight (``busy``), so an answer never meets the wrong message.
 
-A rebooted device remembers nothing: both sets are emptied.
+A rebooted device remembers nothing: both sets are emptied. A hub that resumes its session after
+its own restart (:mod:`.resume`) starts with both filled from what it stored.
 
 Not thread-safe: the caller holds its lock (:class:`.transactions.Transactions`).
 """
@@ -72,6 +73,14 @@ class SeqRules:
         if acked:
             self._acked = seq
         self.events = {seq} if self._acked is None else {seq, self._acked}
+
+    def resumed(self, acked: Optional[int], head: Optional[int]) -> None:
+        """An earlier run of the hub used this hub nonce with the device (:mod:`.resume`): skip the
+        seqs of its last event acknowledged and of the one in flight, and take every seq for a
+        control the device may remember, until an ``R``, ``J`` or ``S`` drawn from now on is answered."""
+        self.controls = {s: self.draws for s in range(256)}
+        self._acked = acked
+        self.events = {s for s in (acked, head) if s is not None}
 
     def device_rebooted(self) -> None:
         """A new device session remembers nothing of the hub's frames."""

@@ -88,6 +88,14 @@ class Transactions:
         with self.lock:
             self.rules.device_rebooted()
 
+    def resume(self, acked: Optional[int], head: Optional[Tuple[int, int]]) -> None:
+        """Go on from an earlier run of the hub (:mod:`.resume`): its seq rules, and the (seq, id)
+        of its event in flight held for it (:meth:`let_go` it if that event is not sent again)."""
+        with self.lock:
+            self.rules.resumed(acked, None if head is None else head[0])
+            if head is not None:
+                self.held[head] = m.EVENT
+
     # ----------------------------------------------------------------------- control right
 
     def claim_control(self, owner: str) -> bool:

@@ -141,3 +141,81 @@ def test_events_waiting_on_the_board_when_the_service_starts_are_stored(soak: Em
             await fleet.close()
             store.close()
     asyncio.run(run())
+
+
+@pytest.mark.parametrize("resume", [True, False])
+def test_hub_event_in_flight_when_the_service_stops(soak: Emulator, tmp_path: Any, resume: bool) -> None:
+    """The device applied a hub event whose ACK the service never got, then the service stopped. The
+    next session resumes the hub session kept for the port (same nonce, the event with its seq and
+    id): the device acknowledges it again without applying it. A new hub session (``resume`` False)
+    is a new hub nonce to the device, which forgets its memory: the event is applied twice."""
+    async def run() -> None:
+        store = Store(str(tmp_path / "state"))
+        port = soak.link
+        hs = durable.hub_session(store, port, resume=True)
+        assert hs is not None and not hs.resumed, "nothing kept yet: a new hub session"
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        assert dev.core.link.nonce == hs.nonce
+        durable.attach(store, "soak", dev, port)
+        tick = next(c.id for c in dev.descriptor.hub if c.name == "tick")
+        on_answer = dev.core.hub.on_answer
+        dev.core.hub.on_answer = (  # type: ignore[method-assign]
+            lambda f: True if f.type == m.ACK and f.id == tick else on_answer(f))  # the service dies first
+        dev.notify("tick", 1)
+        await until_async(dev, "tick_last", 1)
+        await dev.close()
+        kept = store.hub_session(port)
+        assert kept is not None and kept.head is not None and kept.head[2] == tick, kept
+
+        hs = durable.hub_session(store, port, resume=resume)  # the restarted service
+        assert hs is not None and hs.resumed == resume and (hs.nonce == kept.nonce) == resume
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        durable.attach(store, "soak", dev, port)
+        await dev.wait_notified(timeout=10)
+        dev.notify("tick", 2)  # a new event after it: never taken for the device's memory
+        await dev.wait_notified(timeout=10)
+        counts = [await dev.read(c) for c in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")]
+        assert counts == ([2, 1, 2, 0, 0] if resume else [3, 1, 2, 1, 0]), counts
+        assert store.hub_pending("soak") == []
+        got = store.hub_session(port)
+        assert got is not None and got.head is None and got.acked is not None, got
+        await dev.close()
+        store.close()
+    asyncio.run(run())
+
+
+async def until_async(dev: Any, channel: str, value: int, timeout: float = 10) -> None:
+    deadline = asyncio.get_running_loop().time() + timeout
+    while await dev.read(channel) != value:
+        assert asyncio.get_running_loop().time() < deadline, f"{channel} is not {value} after {timeout} s"
+        await asyncio.sleep(0.02)
+
+
+def test_hub_event_waits_while_its_seq_cannot_be_kept(soak: Emulator, tmp_path: Any,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """A hub event goes out only once its seq is on disk (a restart must know what the board may
+    remember): while the write fails it waits, then goes out once."""
+    async def run() -> None:
+        store = Store(str(tmp_path / "state"))
+        port = soak.link
+        hs = durable.hub_session(store, port, resume=True)
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        durable.attach(store, "soak", dev, port)
+        fails = []
+        hub_sent = store.hub_sent
+
+        def full_disk(*a: Any) -> None:
+            if len(fails) < 3:
+                fails.append(a)
+                raise OSError("database or disk is full")
+            hub_sent(*a)
+        monkeypatch.setattr(store, "hub_sent", full_disk)
+        dev.notify("tick", 1)
+        await dev.wait_notified(timeout=10)
+        assert len(fails) == 3, "tried again after each failure"
+        assert [await dev.read(c) for c in ("ticks", "tick_last", "tick_twice")] == [1, 1, 0]
+        got = store.hub_session(port)
+        assert got is not None and got.acked is not None and got.head is None, got
+        await dev.close()
+        store.close()
+    asyncio.run(run())

@@ -176,3 +176,44 @@ def test_an_event_is_stored_whole_or_not_at_all(tmp_path: Any) -> None:
     assert ev is not None and ev.id == 2
     rows, _missed, last = s.events_after("rover", 0)
     assert [(e.id, e.raw) for e in rows] == [(1, b"\x01"), (2, b"\x03")] and last == 2
+
+
+def test_hub_session_round_trip_across_reopen(tmp_path: Any) -> None:
+    """The hub nonce of a port and the seqs of its hub events, as a restarted service reads them back."""
+    s = Store(str(tmp_path))
+    assert s.hub_session("/dev/ttyACM0") is None
+    s.hub_session_new("/dev/ttyACM0", 0x12345678)
+    r1 = s.hub_add("uno", "tick", b"\x01\x00\x00\x00")
+    r2 = s.hub_add("uno", "tick", b"\x02\x00\x00\x00")
+    s.hub_sent("/dev/ttyACM0", r1, 200, 3)  # kept before the event goes out
+    s.close()
+    s = Store(str(tmp_path))  # the service restarted
+    got = s.hub_session("/dev/ttyACM0")
+    assert got is not None and got.nonce == 0x12345678 and got.acked is None and got.head == (r1, 200, 3), got
+    s.hub_done(r1, "/dev/ttyACM0", 200)  # ACK: the device remembers seq 200
+    s.hub_sent("/dev/ttyACM0", r2, 201, 3)
+    s.close()
+    s = Store(str(tmp_path))
+    got = s.hub_session("/dev/ttyACM0")
+    assert got is not None and got.acked == 200 and got.head == (r2, 201, 3), got
+    s.hub_done(r2, "/dev/ttyACM0", None)  # NAK: the device still remembers 200
+    got = s.hub_session("/dev/ttyACM0")
+    assert got is not None and got.acked == 200 and got.head is None, got
+    s.hub_session_new("/dev/ttyACM0", 0x9ABCDEF0, fresh=False)  # the port was opened again
+    got = s.hub_session("/dev/ttyACM0")
+    assert got is not None and got.nonce == 0x9ABCDEF0 and got.acked == 200, "only the nonce changes"
+    s.hub_session_new("/dev/ttyACM0", 0x11111111)  # a new hub session: nothing of the old one counts
+    got = s.hub_session("/dev/ttyACM0")
+    assert got is not None and (got.nonce, got.acked, got.head) == (0x11111111, None, None), got
+    s.close()
+
+
+def test_hub_sessions_bounded_oldest_forgotten(tmp_path: Any) -> None:
+    clock = Clock()
+    s = Store(str(tmp_path), board_limit=3, clock=clock)
+    for i in range(5):
+        clock.t += 1
+        s.hub_session_new(f"/dev/pts/{i}", i + 1)
+    assert sorted(s.hub_session_ports()) == ["/dev/pts/2", "/dev/pts/3", "/dev/pts/4"]
+    assert s.stats()["hub_sessions"] == 3
+    s.close()
