@@ -96,6 +96,7 @@ bench: setup emulator simuno uno-firmware
 # link (the soak sketch in its emulator: discovery, a dead link and a reboot under faults; counts in
 # build/reliability/soak-1M.json), and each fuzzer for half an hour (FUZZ_SECONDS to change).
 soak: setup emulator
+	HUBWIRE_WRAP_BURSTS=$${HUBWIRE_WRAP_BURSTS:-20000} $(BUILD)/cmake/test_wrap_model --gtest_filter='WrapModel.*'
 	HUBWIRE_SOAK_FRAMES=$${HUBWIRE_SOAK_FRAMES:-1000000} $(PY) -m pytest host/tests/reliability/test_soak.py::test_soak_exactly_once_no_corruption_no_reset -s -q
 
 FUZZ_SECONDS ?= 1800
