@@ -32,7 +32,8 @@ MAX_BURST = 300
 HUB_DISTANCES = (256, 256, 256, 256, 255, 257, 128)
 DEVICE_DISTANCES = (256, 256, 129, 129, 128, 130, 255, 257)
 #: kinds whose repetition the device (hub side) or the hub (device side) deduplicates
-HUB_TARGETS = ("hub_event", "write", "blob_write")
+#: (a blob read's target is the hub's reassembly, which also keys on the seq)
+HUB_TARGETS = ("hub_event", "write", "blob_write", "blob_read")
 DEVICE_TARGETS = ("device_write", "mission", "device_event")
 DEVICE_FILLERS = ("device_event", "device_write", "mission")
 
@@ -106,9 +107,11 @@ class Planner:
         filler = r.choice([k for k in fillers if k != target and k in self.kinds])
         dist = r.choice(dists)
         small = r.choice((1, 1, 2, 3, r.randint(1, MAX_BURST)))
+        # the targets under byte drops now and then: a message lost or half received at the edge
+        hit = "drop" if r.random() < 0.2 else "clean"
         self.forced = [Burst(filler, -1, aimed=f"{target}@{dist}"),
-                       Burst(target, r.choice((1, 1, 2, 3)), aimed=f"target@{dist}")]
-        return Burst(target, small)
+                       Burst(target, r.choice((1, 1, 2, 3)), hit, aimed=f"target@{dist}")]
+        return Burst(target, small, hit)
 
     def _aimed(self, b: Burst, hub_seq: int, hub_last: Dict[str, int], device_count: int,
                device_last: Dict[str, int]) -> int:

@@ -40,6 +40,11 @@ class Missions:
         import hubwire
 
         for job, goal, cancel in self.jobs:
+            if cancel and not job.done():  # a cancel that timed out: again, on the clean link
+                try:
+                    job.cancel()
+                except hubwire.HubwireError:
+                    pass
             end = time.monotonic() + seconds + goal * 0.01 * (not cancel)
             while not job.done() and time.monotonic() < end:
                 time.sleep(0.005)
@@ -96,7 +101,10 @@ class Boot:
 
         self.missions.settle()
         seg = self.seg
-        while True:
+        end = time.monotonic() + 60
+        while True:  # the link is clean: should a write still fail, the next token is the last
+            if time.monotonic() > end:
+                raise RuntimeError("no token write was acknowledged on the clean link for 60 s")
             token += 1
             seg["tokens_sent"] += 1
             seg["last_sent"] = token

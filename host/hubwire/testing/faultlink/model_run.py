@@ -20,6 +20,7 @@ import os
 import shutil
 import sys
 import tempfile
+import threading
 import time
 from typing import Any, Callable, Dict, Iterator, List, Optional
 
@@ -42,6 +43,19 @@ STALL_MS = 300.0
 FAULTY_S = 2.0  # a burst under faults stops after this long
 
 
+class _Link(FaultyTransport):
+    """:class:`FaultyTransport` that never hands the device's bytes to the hub inside the hub's own
+    write: the hub writes under its pacer's lock, and answering those bytes (an ACK to a mission
+    update) writes again, on the same thread (a deadlock once delayed bytes fell due then)."""
+
+    def write(self, data: bytes) -> None:
+        if self._loop is None or threading.get_ident() != self._loop_thread:
+            super().write(data)
+            return
+        self._dirs["h2d"].ingest(data, time.monotonic())
+        self._loop.call_soon(self._pump)
+
+
 class ModelRun:
     def __init__(self, seed: int, workdir: str, binary: str, log: Callable[[str], None],
                  fault_rate: float = 0.25) -> None:
@@ -51,7 +65,7 @@ class ModelRun:
         self.link = os.path.join(workdir, f"model-dev-{os.getpid()}")
         self.cache = tempfile.mkdtemp(prefix="model-cache-", dir=workdir)
         self.emu = start_emulator(binary, self.link)
-        self.fl = FaultyTransport(SerialTransport(self.link), seed=seed)
+        self.fl = _Link(SerialTransport(self.link), seed=seed)
         self.traffic = HubTraffic()
         self.dev: Any = hubwire.connect(transport=self.fl, cache_dir=self.cache, timeout=20, hub=self.traffic.hub)
         self.hw = hubwire
