@@ -17,6 +17,7 @@ import argparse
 import json
 import math
 import os
+import random
 import shutil
 import sys
 import tempfile
@@ -70,6 +71,8 @@ class ModelRun:
         self.dev: Any = hubwire.connect(transport=self.fl, cache_dir=self.cache, timeout=20, hub=self.traffic.hub)
         self.hw = hubwire
         self.planner = Planner(seed, fault_rate=fault_rate)
+        # chunk offsets apart: a faulty burst's length varies with timing, the plan must not
+        self.offsets = random.Random(seed + 1)
         self.blobs = BlobLoad(self.dev, log)
         self.token = 0
         self.boot = Boot(1, log)
@@ -194,7 +197,7 @@ class ModelRun:
         return self.ops
 
     def _chunk(self, b: Burst) -> int:
-        rng, x = self.planner.rng, self.boot.x
+        rng, x = self.offsets, self.boot.x
         for _ in self._ops(b.n):
             off = rng.randrange(len(self.raw))
             a = self._guard(lambda: self.dev.session.transact(m.CHUNK, 0, m.ChunkRequest(off, 28).pack()))
