@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any
+from typing import Any, Dict
 
 import pytest
 
@@ -58,7 +58,9 @@ def test_every_kind_exactly_once_in_any_mix(tmp_path: Any) -> None:
 def test_the_planner_is_reproducible_and_aims_at_the_counters_edges() -> None:
     def play(seed: int) -> Any:
         p = Planner(seed)
-        hub_seq, count, hub_last, dev_last, out = 0, 0, {}, {}, []
+        hub_seq, count, out = 0, 0, []
+        hub_last: Dict[str, int] = {}
+        dev_last: Dict[str, int] = {}
         for _ in range(300):
             b = p.next(hub_seq, hub_last, count, dev_last)
             out.append(str(b))

@@ -28,7 +28,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional
 from ...transport import SerialTransport
 from ...wire import messages as m
 from . import FaultyTransport, stop_process
-from .model import HUB_KINDS, KINDS, Burst, Planner
+from .model import FAULTS, HUB_KINDS, KINDS, Burst, Planner
 from .model_count import FAIL_GOAL, LONG_GOAL, Boot, check_run, summary
 from .soak import soak_emulator_binary, start_emulator
 from .soak_hub import HubTraffic
@@ -82,7 +82,7 @@ class ModelRun:
         self.hub_last: Dict[str, int] = {}
         self.device_last: Dict[str, int] = {}
         self.kinds = {k: {"bursts": 0, "aimed": 0, "messages": 0, "faults": 0} for k in KINDS}
-        self.injected = {k: 0 for k in ("drop", "dup", "ber", "delay", "stall", "cut", "reboot")}
+        self.injected = {k: 0 for k in FAULTS}
         self.raw = self.dev.descriptor.raw
         self.battery = self.dev.channel("battery").id
         self.until = math.inf  # a burst on a cut link stops when the cut ends
@@ -123,9 +123,8 @@ class ModelRun:
             self.device_last[b.kind] = self.device_count()
 
     def _fault_on(self, fault: str) -> None:
-        if fault == "clean":
-            return
-        self.injected[fault] += 1
+        if fault != "clean":
+            self.injected[fault] += 1
         if fault in FAULT_SETTINGS:
             self.fl.set_faults(**FAULT_SETTINGS[fault])
         elif fault == "stall":
@@ -224,8 +223,7 @@ class ModelRun:
 
     def _blob_write(self, b: Burst) -> int:
         for _ in self._ops(b.n):
-            if self.blobs._write():
-                self.blob_acked = self.blobs.token
+            self.blob_acked = self.blobs.token if self.blobs._write() else self.blob_acked
         return self.ops
 
     def _blob_read(self, b: Burst) -> int:
