@@ -7,7 +7,7 @@ that a kind's next message comes 128, 256 or one either side seqs after its last
 both directions, some under faults. 0 lost after an ACK, 0 applied twice, 0 torn, 0 corrupt,
 counted on both ends.
 
-Bounded by default (HUBWIRE_MODEL_BURSTS, default 100; seed HUBWIRE_MODEL_SEED, default 7).
+Bounded by default (HUBWIRE_MODEL_BURSTS, default 100; seed HUBWIRE_MODEL_SEED, default 9).
 Long mode: HUBWIRE_MODEL_WRAPS=100 plays until every kind sent 100 x 256 messages and writes
 build/reliability/model-wraps<N>-seed<S>.json (``make soak`` runs it).
 """
@@ -31,7 +31,7 @@ def test_every_kind_exactly_once_in_any_mix(tmp_path: Any) -> None:
     binary = soak_emulator_binary()
     if not os.access(binary, os.X_OK):
         pytest.fail(f"soak emulator not found at {binary}: build it with `make emulator`", pytrace=False)
-    seed = int(os.environ.get("HUBWIRE_MODEL_SEED", "7"))
+    seed = int(os.environ.get("HUBWIRE_MODEL_SEED", "9"))
     wraps = float(os.environ["HUBWIRE_MODEL_WRAPS"]) if os.environ.get("HUBWIRE_MODEL_WRAPS") else None
     bursts = None if wraps else int(os.environ.get("HUBWIRE_MODEL_BURSTS", "100"))
     r = run_model(seed=seed, bursts=bursts, wraps=wraps, workdir=str(tmp_path), binary=binary)

@@ -61,7 +61,7 @@ class Planner:
         self.rng = random.Random(seed)
         self.fault_rate, self.aim_rate, self.kinds = fault_rate, aim_rate, kinds
         self.forced: List[Burst] = []
-        #: a kind played more often (the long run favours the one furthest from its wraps)
+        #: a kind half the plain bursts play (the runner sets the one that sent the fewest messages)
         self.favour: Optional[str] = None
         self.log: List[str] = []
 

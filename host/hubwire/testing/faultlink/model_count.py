@@ -36,7 +36,7 @@ class Missions:
         self.c["started"] += 1
         self.jobs.append([job, goal, cancel])
 
-    def settle(self, seconds: float = 10.0) -> None:
+    def settle(self, seconds: float = 5.0) -> None:
         import hubwire
 
         for job, goal, cancel in self.jobs:

@@ -359,8 +359,7 @@ def run_model(*, seed: int = 1, bursts: Optional[int] = None, wraps: Optional[fl
     t0, played, next_log = time.monotonic(), 0, time.monotonic() + 30
     try:
         while (bursts is not None and played < bursts) or (wraps is not None and run.wraps() < wraps):
-            if wraps is not None:
-                run.planner.favour = min(run.kinds, key=lambda k: run.kinds[k]["messages"])
+            run.planner.favour = min(run.kinds, key=lambda k: run.kinds[k]["messages"])
             b = run.planner.next(run.hub_seq(), run.hub_last, run.device_count(), run.device_last)
             run.play(b)
             played += 1
