@@ -91,7 +91,10 @@ class ModelRun:
     # ------------------------------------------------------------------ counters
 
     def hub_seq(self) -> int:
-        return int(self.dev.session.core.tx._seq)
+        """The hub's transaction counter (kept by its seq rules where the hub has them)."""
+        tx = self.dev.session.core.tx
+        rules = getattr(tx, "rules", None)
+        return int(rules.seq if rules is not None else getattr(tx, "_seq"))
 
     def device_count(self) -> int:
         """Device messages the hub took (duplicates too: a new message dropped as one took a seq)."""
