@@ -94,10 +94,13 @@ bench: setup emulator simuno uno-firmware
 
 # Long modes of the reliability checks (docs/RELIABILITY.md): 1,000,000 frames through the faulty
 # link (the soak sketch in its emulator: discovery, a dead link and a reboot under faults; counts in
-# build/reliability/soak-1M.json), and each fuzzer for half an hour (FUZZ_SECONDS to change).
+# build/reliability/soak-1M.json), the model-based exactly-once test until every message kind
+# wrapped its 8-bit counter 100 times (HUBWIRE_MODEL_WRAPS, HUBWIRE_MODEL_SEED; counts in
+# build/reliability/model-wraps100-seed<S>.json), and each fuzzer for half an hour (FUZZ_SECONDS to change).
 soak: setup emulator
 	HUBWIRE_WRAP_BURSTS=$${HUBWIRE_WRAP_BURSTS:-20000} $(BUILD)/cmake/test_wrap_model --gtest_filter='WrapModel.*'
 	HUBWIRE_SOAK_FRAMES=$${HUBWIRE_SOAK_FRAMES:-1000000} $(PY) -m pytest host/tests/reliability/test_soak.py::test_soak_exactly_once_no_corruption_no_reset -s -q
+	HUBWIRE_MODEL_WRAPS=$${HUBWIRE_MODEL_WRAPS:-100} $(PY) -m pytest host/tests/reliability/test_model.py::test_every_kind_exactly_once_in_any_mix -s -q
 
 FUZZ_SECONDS ?= 1800
 fuzz-long: setup
