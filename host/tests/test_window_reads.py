@@ -16,7 +16,7 @@ from hubwire.session.windows import WINDOW_HEADER, WindowAssembly
 from hubwire.wire import messages as m
 from hubwire.wire.frame import Frame
 
-from largedevice import LargeDevice
+from largedevice import CHANNELS, LargeDevice
 
 NakCode = m.NakCode
 
@@ -114,3 +114,27 @@ def test_a_small_value_is_read_as_before(tmp_path: pathlib.Path) -> None:
         dev.path = [1, 2, 3]
         assert dev.path == [1, 2, 3]
         assert fake.windows == [] and fake.wholes == 0
+
+
+class ShrinkingDevice(LargeDevice):
+    """``log``, a list of up to 200 bytes, full, shrinks to 10 bytes after the third window; the
+    whole-value try is lost on the line."""
+
+    def __init__(self) -> None:
+        super().__init__(CHANNELS + [{"id": 8, "n": "log", "a": "r", "t": "u8", "vc": 200}])
+        self.values[8] = bytes([200]) + bytes(range(200))
+        self.windows = 0
+
+    def handle(self, f: Frame) -> None:
+        if f.type != m.REQUEST or f.id != 8 or not f.payload:
+            return None if f.type == m.REQUEST and f.id == 8 else super().handle(f)
+        super().handle(f)
+        self.windows += 1
+        if self.windows == 3:
+            self.values[8] = bytes([10]) + bytes(range(100, 110))
+
+
+def test_a_list_that_gets_shorter_between_windows_is_read_again(tmp_path: pathlib.Path) -> None:
+    with ShrinkingDevice() as fake, hubwire.connect(fake.path, cache_dir=tmp_path, retry_timeout=0.3) as dev:
+        assert dev.log == list(range(100, 110))  # window 4 asked past the new end: BAD_OFFSET, from 0 again
+        assert fake.windows == 5

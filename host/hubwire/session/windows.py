@@ -138,7 +138,11 @@ class ReadPlan:
             core.whole_reads_only = (core.descriptor_nonce,)
             self.asm, self.windows = None, False
             return
-        if not isinstance(e, Timeout):
+        if isinstance(e, NakError) and e.code == NakCode.BAD_OFFSET and self.asm.total is not None:
+            restarts = self.asm.restarts + 1  # the value (a list, a string) got shorter: start over
+            self.asm = WindowAssembly()
+            self.asm.restarts = restarts
+        elif not isinstance(e, Timeout):
             raise e
         if time.monotonic() > self.deadline:
             raise Timeout(f"no whole value of {self.what or self.ch.id} on {core.url} by its deadline "
