@@ -32,6 +32,7 @@ from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, 
 from .session.events import EventSink
 from .session.hub_channels import HubSide
 from .session.runner import LoopDispatcher
+from .session.windows import read_async
 from .text import clip
 from .transport import Transport
 from .wire import messages as m
@@ -161,10 +162,7 @@ class AsyncDevice(HubMethods):
     async def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
         """Read a readable channel's current value."""
         ch = ops.readable(self._core.descriptor, name)
-        a = await self._core.tx.transact(m.REQUEST, ch.id, b"", timeout=timeout, what=name)
-        if a.type != m.RESPONSE:
-            raise HubwireError(f"unexpected answer type 0x{a.type:02x} to a read of {name}")
-        return ch.codec.decode(a.payload)
+        return ch.codec.decode(await read_async(self._core, ch, timeout, name))  # large ones in windows
 
     async def write(self, name: str, value: Any, *, timeout: Optional[float] = None) -> None:
         """Write a writable channel; returns once the device acknowledged it (exactly once)."""

@@ -1,8 +1,9 @@
 """A scripted device on a pty that follows PROTOCOL.md 12 as the reference device does: it accepts
 32-byte payloads, reassembles the hub's large `C` into one buffer sized to its largest writable or
 argument value (NAK BAD_LENGTH for a total over it), answers large reads and calls in fragments of
-its own, and checks values (lists included) with the hub's codecs in the device's order. Test helper
-only: it counts what it applied so tests can prove exactly once."""
+its own and window requests (12.8) in one frame, and checks values (lists included) with the hub's
+codecs in the device's order. Test helper only: it counts what it applied so tests can prove
+exactly once."""
 from __future__ import annotations
 
 import json
@@ -120,6 +121,10 @@ class LargeDevice(PtyPeer):
             c = self.desc.by_id(f.id)
             if c is None or not c.readable:
                 self.send(m.NAK, f.seq, f.id, bytes((NakCode.UNKNOWN_CHANNEL if c is None else NakCode.NOT_READABLE,)))
+            elif len(f.payload) == 4:
+                self.window(f, self.values[f.id])
+            elif f.payload:
+                self.send(m.NAK, f.seq, f.id, bytes((NakCode.BAD_LENGTH,)))
             else:
                 self.reply(m.RESPONSE, f.seq, f.id, self.values[f.id])
         elif f.type == m.SUBSCRIBE:
@@ -128,6 +133,16 @@ class LargeDevice(PtyPeer):
             self.send(m.ACK, f.seq, f.id, f.payload)
         elif f.type == m.CONTROL:
             self._control(f)
+
+    def window(self, f: Frame, value: bytes, hash: Optional[int] = None) -> None:
+        """Answer a window request (PROTOCOL.md 12.8) with a window of ``value`` (``hash``: claim another)."""
+        offset, count = struct.unpack("<HH", f.payload)
+        if offset > len(value):
+            self.send(m.NAK, f.seq, f.id, bytes((NakCode.BAD_OFFSET,)))
+            return
+        n = min(count, self.max_payload - 8, len(value) - offset)
+        h = m.fnv1a32(value) if hash is None else hash
+        self.send(m.RESPONSE, f.seq, f.id, struct.pack("<HHI", offset, len(value), h) + value[offset:offset + n])
 
     def _fragment(self, f: Frame) -> Optional[Frame]:
         try:

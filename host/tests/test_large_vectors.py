@@ -11,6 +11,7 @@ import pytest
 from hubwire.descriptor import parse_descriptor
 from hubwire.errors import InvalidValue
 from hubwire.session.fragments import Reassembler, encode_message
+from hubwire.session.windows import WindowAssembly, window_request
 from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
 from framevectors import check_frame, load
@@ -80,6 +81,16 @@ def test_exchange_through_a_reassembler(e: Dict[str, Any]) -> None:
     got = [a for a in FrameDecoder(LIMIT).feed(wires(e["answer"]))
            if a.type != m.FRAGMENT or answers.feed(a) is not None]
     assert [(w.seq, w.id) for w in whole] == [(a.seq, a.id) for a in got]
+
+
+def test_the_window_vector_is_what_the_hub_asks_and_assembles() -> None:
+    ask = BY_NAME["hub asks for a window of big: 100 bytes from offset 50 (seq 0x12)"]
+    assert bytes.fromhex(ask["payload"]) == window_request(50, 100)
+    answer = bytes.fromhex(BY_NAME[starting("device answers the window: offset 50")[0]]["payload"])
+    asm = WindowAssembly()
+    assert asm.add(50, answer) is None
+    assert (asm.total, asm.hash, asm.next_offset()) == (200, m.fnv1a32(BIG), 0)
+    assert answer[8:] == BIG[50:74]
 
 
 def test_lists_on_the_channel_of_the_vectors() -> None:

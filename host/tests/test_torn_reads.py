@@ -4,7 +4,8 @@ answer to the retry must not complete what arrived of the answer to the first tr
 The device double answers the first try of a read of ``mid`` (200 bytes, 8 fragments of 32-byte
 frames) with its first fragment only (the rest lost on the line), and the second try, the value
 having changed meanwhile, with every fragment but the first (that one lost). A hub that retried
-with the same seq would glue the first fragment of the old value to the rest of the new one."""
+with the same seq would glue the first fragment of the old value to the rest of the new one. It predates window reads
+(PROTOCOL.md 12.8: NAK BAD_LENGTH), so the hub's retries are whole reads."""
 from __future__ import annotations
 
 import pathlib
@@ -33,6 +34,9 @@ class ChangingDevice(LargeDevice):
     def handle(self, f: Frame) -> None:
         if f.type != m.REQUEST or f.id != 2:
             return super().handle(f)
+        if f.payload:  # a device that predates windows (PROTOCOL.md 12.8): the hub reads it whole
+            self.send(m.NAK, f.seq, f.id, bytes((m.NakCode.BAD_LENGTH,)))
+            return
         self.tries.append(f.seq)
         n = len(self.tries)
         value = self.codec.encode(snapshot(min(n, 2)))

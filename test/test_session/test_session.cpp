@@ -430,6 +430,10 @@ TEST_F(Session, ReadErrors) {
   expectNak(transact('R', 0), kErrUnknownChannel);
   expectNak(transact('R', kLed), kErrNotReadable);
   expectNak(transact('R', kSpeed, Bytes(1)), kErrBadLength);
+  // a window request (PROTOCOL.md 12.8) is answered only by a sketch with a large value
+  EXPECT_EQ(hubwire_channels_tester::features & kUsesLarge, 0);
+  EXPECT_EQ((HubwireLarge<true, void>::send), nullptr);
+  expectNak(transact('R', kSpeed, Bytes{0, 0, 4, 0}), kErrBadLength);
 }
 
 TEST_F(Session, WriteStoresCallsBackAndAcks) {

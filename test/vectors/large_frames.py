@@ -10,7 +10,9 @@ streamable; `path`, a list of up to 8 `i16` within -1000..1000. Fragments of a m
 device carry 32 - 5 = 27 bytes; the device's own fragments likewise 27 bytes (its frame holds 32).
 
 `vectors` pins single frames (`message.kind` `fragment`: `carries` the carried type, `offset`,
-`total`, `data` hex). `exchanges` are what a device does with them, in order: every frame of
+`total`, `data` hex; a window request, PROTOCOL.md 12.8, is a `request` whose `value` is its
+[u16 offset, u16 count], its answer a `response` [u16 offset, u16 total, u32 hash, bytes]).
+`exchanges` are what a device does with them, in order: every frame of
 `send` goes to the device (a freshly linked device; the hub's transaction seq as given), and the
 device answers exactly the frames of `answer`, in order, and no other; `dropped` is how much the
 device's `dropped` counter grows (what its next heartbeat reports); `value` (hex) is what the
@@ -76,6 +78,18 @@ def gen() -> Dict[str, Any]:
     answer = add_split("device answers the read of big (seq 0x11)", "device", m.RESPONSE, 0x11, BIG_ID, BIG)
     exchange("a large read is answered in fragments, back to back", write + [read], [ack] + answer,
              value=(BIG_ID, BIG))
+    # a window of the value (PROTOCOL.md 12.8): one frame, 32 - 8 = 24 bytes of it
+    win = add("hub asks for a window of big: 100 bytes from offset 50 (seq 0x12)", "hub", m.REQUEST, 0x12, BIG_ID,
+              struct.pack("<HH", 50, 100))
+    window = add("device answers the window: offset 50, total 200, FNV-1a of all of big, bytes 50..73 (seq 0x12)",
+                 "device", m.RESPONSE, 0x12, BIG_ID, struct.pack("<HHI", 50, 200, m.fnv1a32(BIG)) + BIG[50:74])
+    exchange("a window of a large value is one frame: what the frame holds, the value's total and hash",
+             write + [win], [ack, window], value=(BIG_ID, BIG))
+    past = add("hub asks for a window of big past its end (seq 0x13)", "hub", m.REQUEST, 0x13, BIG_ID,
+               struct.pack("<HH", 201, 4))
+    bad = add("device refuses the window past the end: BAD_OFFSET (seq 0x13)", "device", m.NAK, 0x13, BIG_ID,
+              bytes((m.NakCode.BAD_OFFSET,)))
+    exchange("a window past the end of the value is BAD_OFFSET", [past], [bad])
     sample = add_split("device streams a sample of big (sample seq 0, dt 0)", "device", m.SAMPLE, 0, BIG_ID,
                        struct.pack("<H", 0) + BIG)
     assert len(sample) == 8

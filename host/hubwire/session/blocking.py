@@ -69,7 +69,7 @@ def wait_ready(core: Any, timeout: float) -> None:
 
 
 def transact(core: Any, gate: ThreadGate, type: int, id: int, payload: bytes = b"", *,
-             timeout: Optional[float] = None, what: str = "") -> Frame:
+             timeout: Optional[float] = None, what: str = "", tries: Optional[int] = None) -> Frame:
     """Send one transaction from this thread and return its answer; see :meth:`Transactions.transact`."""
     tx = core.tx
     retry = core.retry_timeout if timeout is None else timeout / core.tries
@@ -83,6 +83,7 @@ def transact(core: Any, gate: ThreadGate, type: int, id: int, payload: bytes = b
             p = tx.try_register(type, id, payload, threaded=True, slot=True)
             if p is None:
                 p = _register_later(core, type, id, payload, retry, what)
+            p.max_tries = tries or 0
             try:
                 tx.transmit(p)
                 return _answer(core, p, retry, what)

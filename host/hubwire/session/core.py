@@ -69,6 +69,8 @@ class SessionCore:
         self.descriptor_nonce: Optional[int] = None
         # (device nonce, board id) once asked: the id a device reports is read once per boot
         self.board_id: Optional[Tuple[Optional[int], Optional[str]]] = None
+        # (device nonce,) once that boot of the device refused a window read (session/windows.py)
+        self.whole_reads_only: Optional[Tuple[Optional[int]]] = None
         self.discovery_error: Optional[BaseException] = None
         self.progress_at = 0.0
         self.link_lost_cbs: List[Callable[[], Any]] = []

@@ -20,6 +20,7 @@ from .records import LinkHealth, State, Stats
 from .slots import DEFAULT_MAX_IN_FLIGHT
 from .runner import ThreadDispatcher, acquire_loop, on_loop_thread, release_loop, run_sync
 from .streams import ThreadSubscription, granted_interval
+from .windows import read_sync
 
 __all__ = ["Session"]
 
@@ -155,16 +156,19 @@ class Session:
         return run_sync(self._loop, aw)
 
     def transact(self, type: int, id: int, payload: bytes = b"", *, timeout: Optional[float] = None,
-                 what: str = "") -> Frame:
+                 what: str = "", tries: Optional[int] = None) -> Frame:
         """Send one transaction and return its answer; see :meth:`Transactions.transact`."""
         if self._loop is None:
             raise HubwireError("session is closed")
         if on_loop_thread():
             raise RuntimeError("hubwire: a synchronous call cannot be made on the hub's event loop thread")
-        return blocking.transact(self.core, self._gate, type, id, payload, timeout=timeout, what=what)
+        return blocking.transact(self.core, self._gate, type, id, payload, timeout=timeout, what=what, tries=tries)
 
     def request(self, id: int, *, timeout: Optional[float] = None, what: str = "") -> bytes:
-        """``R``: read a channel; returns the ``r`` payload."""
+        """``R``: read a channel; returns the ``r`` payload (a large value's in windows: windows.py)."""
+        ch = self.descriptor.by_id(id) if self.descriptor is not None else None
+        if ch is not None:
+            return read_sync(self, ch, timeout, what)
         a = self.transact(m.REQUEST, id, b"", timeout=timeout, what=what)
         if a.type != m.RESPONSE:
             raise HubwireError(f"unexpected answer type 0x{a.type:02x} to a read of {what or id}")

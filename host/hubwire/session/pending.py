@@ -18,7 +18,7 @@ class Pending:
     NOT_LINKED NAK is retried); a thread waits on ``event`` and reads ``answer`` / ``error``."""
 
     __slots__ = ("type", "seq", "id", "payload", "wire", "fut", "event", "answer", "error", "sent_at", "tries",
-                 "drawn", "slot", "acked")
+                 "drawn", "slot", "acked", "max_tries")
 
     def __init__(self, type: int, seq: int, id: int, wire: bytes, *, loop: Optional[asyncio.AbstractEventLoop] = None) -> None:
         self.type = type
@@ -35,6 +35,7 @@ class Pending:
         self.drawn = 0  # the seq's draw number (SeqRules.draws)
         self.slot = False  # holds one of the session's slots (released by unregister)
         self.acked = False  # a C answered ACK or r: the device remembers it
+        self.max_tries = 0  # tries before Timeout; 0: the session's (Transactions.tries_for)
 
     def done(self) -> bool:
         if self.fut is not None:

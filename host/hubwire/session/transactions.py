@@ -254,6 +254,8 @@ class Transactions:
     def tries_for(self, p: Pending) -> int:
         """``tries``, and for a control in fragments one more per fragment: the device keeps what each
         try brought (PROTOCOL.md 12.4), so a long value needs tries in proportion to its length."""
+        if p.max_tries:
+            return p.max_tries
         frames = p.wire.count(0)
         return int(self.core.tries) + (frames if p.type == m.CONTROL and frames > 1 else 0)
 
@@ -294,11 +296,12 @@ class Transactions:
             w.wake()
 
     async def transact(self, type: int, id: int, payload: bytes = b"", *, timeout: Optional[float] = None,
-                       what: str = "") -> Frame:
+                       what: str = "", tries: Optional[int] = None) -> Frame:
         """Send one transaction and return its answer (ACK, ``r``, ``J``); raise NakError on NAK.
 
-        Retries every ``retry_timeout`` up to ``tries`` times (Timeout after). Controls (``C``) are
-        stop-and-wait: they run alone. Beyond ``max_in_flight`` transactions it waits its turn.
+        Retries every ``retry_timeout`` up to ``tries`` times (Timeout after; ``tries`` given: that
+        many, each ``timeout`` / the session's tries long). Controls (``C``) are stop-and-wait: they
+        run alone. Beyond ``max_in_flight`` transactions it waits its turn.
         """
         core = self.core
         retry = core.retry_timeout if timeout is None else timeout / core.tries
@@ -315,6 +318,7 @@ class Transactions:
                 p = self.try_register(type, id, payload, slot=True)
                 if p is None:
                     p = await self._register_later(type, id, payload, retry, what)
+                p.max_tries = tries or 0
                 try:
                     self.transmit(p)
                     return await self._answer(p, retry, what)

@@ -56,6 +56,9 @@ void Session::onRequest(const Frame& f) {
     return sendNak(kErrUnknownChannel);
   }
   if (!uses(kUsesReads) || !(ch.access & kReadable)) return sendNak(kErrNotReadable);
+  // A window of the value (PROTOCOL.md 12.8): only a sketch with a large value has the hook.
+  if (HubwireLarge<true, void>::send && f.len == kWindowRequest)
+    return (void)HubwireLarge<true, void>::send(*this, kMsgRequest, f.seq, f.id, ch, f.payload, kWindowRequest, false);
   // Not sent at all when the hub could not take it (its hello said how much it accepts), unless
   // it may go as fragments (fragments.cpp).
   if (f.len != 0 || (uses(kUsesWide) && !HubwireLarge<true, void>::send && ch.type.wireSize() > maxOut()))

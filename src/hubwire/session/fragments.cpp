@@ -76,6 +76,34 @@ void fragmentReceived(Session& s, const Frame& f) {
 
 bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch, const uint8_t* prefix,
                uint8_t prefixLen, bool room) {
+  if (type == kMsgRequest) {
+    // The answer to a window request (PROTOCOL.md 12.8), whose payload is prefix: one frame,
+    // [offset, total, FNV-1a of the whole wire form, bytes offset..]. The hash is taken through
+    // wireRange in pieces the size of the frame's free room, which the window's bytes then fill: no
+    // copy of the value, and the sketch's loop() does not run in between: one snapshot.
+    uint16_t offset = loadU16(prefix), count = loadU16(prefix + 2);
+    uint16_t total = ch.type.wireLength(ch.data);
+    if (offset > total) return s.sendNak(kErrBadOffset), true;
+    uint8_t* out = s.tx().payload();
+    uint8_t room = (uint8_t)(s.maxOut() - kWindowHeader);  // maxOut() >= 16
+    uint8_t* at = out + kWindowHeader;
+    uint32_t h = kFnvOffset;
+    for (uint16_t from = 0; from < total;) {
+      uint8_t k = total - from < room ? (uint8_t)(total - from) : room;
+      ch.type.wireRange(ch.data, from, at, k);
+      for (uint8_t i = 0; i < k; ++i) h = fnv1a(h, at[i]);
+      from = (uint16_t)(from + k);
+    }
+    uint16_t n = total - offset;
+    if (n > room) n = room;
+    if (n > count) n = count;
+    ch.type.wireRange(ch.data, offset, at, n);
+    storeU16(out, offset);
+    storeU16(out + 2, total);
+    storeU32(out + 4, h);
+    s.send(kMsgResponse, seq, id, (uint8_t)(kWindowHeader + n));
+    return true;
+  }
   uint16_t total = (uint16_t)(prefixLen + ch.type.wireLength(ch.data));
   uint8_t* out = s.tx().payload();
   uint8_t max = s.maxOut();

@@ -38,7 +38,8 @@ void fragmentReceived(Session& s, const Frame& f);
 typedef void (*FragmentReceiver)(Session& s, const Frame& f);
 // Sends type (seq, id) carrying prefix (prefixLen bytes) then ch's value: one frame if it fits the
 // hub, else fragments. With room, only if the port has room for the first frame now (samples);
-// false when it did not send.
+// false when it did not send. Type kMsgRequest: answers a window request (PROTOCOL.md 12.8) whose
+// 4-byte payload is prefix, with one `r` frame (or NAK BAD_OFFSET).
 bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch, const uint8_t* prefix,
                uint8_t prefixLen, bool room);
 typedef bool (*LargeSender)(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch,

@@ -37,6 +37,8 @@ const uint8_t kChunkRequestSize = 3;
 const uint8_t kChunkHeader = 4;
 const uint8_t kSampleHeader = 2;
 const uint8_t kFragmentHeader = 5;  // carried type, offset (u16), total (u16)
+const uint8_t kWindowRequest = 4;   // R asking for a window of a value: offset (u16), count (u16)
+const uint8_t kWindowHeader = 8;    // its answer r: offset (u16), total (u16), the value's FNV-1a (u32)
 
 // FNV-1a 32, the descriptor hash carried in hello.
 const uint32_t kFnvOffset = 0x811C9DC5UL;
