@@ -118,6 +118,22 @@ TEST_F(Large, ATryCarriesOnWhereTheOneBeforeLeftOff) {
   EXPECT_EQ(kiloChanges, 1);
 }
 
+// A retry of a large control that was applied but whose answer was lost: its last fragment is
+// enough to have it answered again (not applied again), whatever of the rest is lost.
+TEST_F(Large, ARetryOfAnAnsweredLargeControlIsAnsweredFromItsLastFragment) {
+  link();
+  Bytes value = pattern(1024, 11);
+  auto f = split('C', value);
+  ASSERT_EQ(send(0x64, kKilo, f).size(), 1u);  // applied; say its ACK was lost
+  auto got = send(0x64, kKilo, std::vector<Bytes>(f.end() - 1, f.end()));
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, 0x07);
+  EXPECT_EQ(got[0].seq, 0x64);
+  EXPECT_EQ(kiloChanges, 1);
+  EXPECT_TRUE(send(0x64, kKilo, std::vector<Bytes>(f.begin(), f.end() - 1)).empty());  // no last one: no answer
+  EXPECT_EQ(kiloChanges, 1);
+}
+
 // A control between two tries ends the one in progress: a later message that happens to take the
 // same seq, id and length never completes it with bytes of its own.
 TEST_F(Large, AnotherControlEndsAHalfReassembledOne) {

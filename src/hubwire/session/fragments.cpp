@@ -27,7 +27,20 @@ void fragmentReceived(Session& s, const Frame& f) {
   const uint8_t* p = f.payload;
   uint8_t type = p[0];
   uint16_t offset = loadU16(p + 1), total = loadU16(p + 3), n = (uint16_t)(f.len - kFragmentHeader);
-  if (r && r->total && type == r->type && f.seq == r->seq && f.id == r->id && total == r->total) {
+  bool same = r && r->total && type == r->type && f.seq == r->seq && f.id == r->id && total == r->total;
+  if (same && r->next == total) {
+    // Complete and handled already. While the session still remembers that control, this is its
+    // retry (its answer was lost): the last fragment has it answered again from that memory, not
+    // applied again, where the retry would otherwise have to come whole once more. Else it is
+    // another message: the old one is forgotten.
+    if (s.lastTxnControl_ && f.seq == s.lastTxnSeq_ && f.id == s.lastTxnId_) {
+      if (total - offset == n) s.handle(Frame{type, f.seq, f.id, 0xFF, reassemblyData(r)});
+      return;
+    }
+    r->total = 0;
+    same = false;
+  }
+  if (same) {
     // The message in progress, or a retry of it: a retry carries the same bytes (4.1, rule 1), so
     // what is here stays, a fragment it has is skipped and one past a gap dropped. Each try then
     // adds to the last, and a long value needs tries in proportion to its length, not to the
@@ -62,16 +75,15 @@ void fragmentReceived(Session& s, const Frame& f) {
   uint8_t* data = reassemblyData(r);
   memcpy(data + offset, p + kFragmentHeader, n);
   r->next = (uint16_t)(offset + n);
-  if (r->next != total) return;
-  r->total = 0;
+  if (r->next != total) return;  // complete: kept so, for a retry (above), until another message
   if (!answered(type)) {  // the hub sends the device nothing else this long (hub values fit a frame)
+    r->total = 0;
     ++s.rx_.counters.dropped;
     return;
   }
   // Handled as if it had come in one frame. len 0xFF is what no R, J or S carries (they answer
   // BAD_LENGTH, as for a long one); a control reads the whole length (wholeLength(): r->next).
-  Frame whole = {type, f.seq, f.id, 0xFF, data};
-  s.handle(whole);
+  s.handle(Frame{type, f.seq, f.id, 0xFF, data});
 }
 
 bool sendLarge(Session& s, uint8_t type, uint8_t seq, uint8_t id, const ChannelInfo& ch, const uint8_t* prefix,

@@ -123,9 +123,10 @@ void Session::handle(const Frame& f) {
   }
   if (!linked_) return sendNak(kErrNotLinked);
   bool control = f.type == kMsgControl;
-  // Another control of the hub (one at a time, 4.4): a control half reassembled will not be
-  // retried, so no later message may complete it (fragments.cpp keeps a partial for its retry).
-  if (HubwireLarge<true, void>::state && control) HubwireLarge<true, void>::state->total = 0;
+  // Another control of the hub (one at a time, 4.4; 0xFF: the reassembled one itself): a control
+  // half reassembled will not be retried, so no later message may complete it (fragments.cpp keeps
+  // a partial, or a whole one answered already, for its retry).
+  if (HubwireLarge<true, void>::state && control && f.len != 0xFF) HubwireLarge<true, void>::state->total = 0;
   if (control && lastTxnControl_ && f.seq == lastTxnSeq_ && f.id == lastTxnId_) {
     // a retried control: answer again, do not apply twice (without returns the answer kept is
     // one byte, an ACK's or a NAK's code)
