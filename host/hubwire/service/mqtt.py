@@ -16,6 +16,7 @@ import ssl
 from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Sequence, Set, Tuple
 
 import aiomqtt
+from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from .board import BoardBridge
@@ -54,6 +55,12 @@ DROP_LOG_INTERVAL_S = 10.0
 CLIENT_QUEUE = 4 * INBOUND_QUEUE
 #: boards of other services remembered (from their retained descriptors)
 MAX_ELSEWHERE = 4096
+#: the largest MQTT packet the bridge takes, bytes (as a socket client's line, docs/SERVICE.md
+#: "Limits"): the broker is told so at connect and drops larger ones for us (MQTT 5 Maximum Packet
+#: Size), and one that comes anyway is dropped unread. Parsing a value of many megabytes holds the
+#: loop long enough for the boards to miss their heartbeats; the largest command (a 65,535-byte
+#: value as JSON) is far below it.
+MAX_PACKET = 1 << 20
 
 
 class BoardLike(Protocol):
@@ -124,6 +131,8 @@ class Bridge:
         self.retired = Retired(self.topics, config.service_id)
         self._tasks: Set["asyncio.Task[Any]"] = set()
         self._failing = False
+        #: messages over MAX_PACKET that came although the broker was told (dropped unread)
+        self.oversized = 0
         #: commands refused for their reply topic; when that was last logged
         self.refusals = 0
         self._refusal_logged_at: Optional[float] = None
@@ -158,12 +167,14 @@ class Bridge:
     async def _session(self) -> None:
         status = self.topics.service_status(self.config.service_id)
         will = aiomqtt.Will(status, OFFLINE, qos=1, retain=True)
+        connect = Properties(PacketTypes.CONNECT)  # type: ignore[no-untyped-call]
+        connect.MaximumPacketSize = MAX_PACKET
         async with aiomqtt.Client(self.host, self.port, identifier=f"hubwire-{self.config.service_id}",
                                   protocol=aiomqtt.ProtocolVersion.V5, will=will, clean_start=True,
                                   keepalive=self.config.keepalive, username=self.username,
                                   password=self.password, socket_options=NODELAY,
                                   tls_context=self.tls_context, logger=_client_log,
-                                  max_queued_incoming_messages=CLIENT_QUEUE) as client:
+                                  max_queued_incoming_messages=CLIENT_QUEUE, properties=connect) as client:
             self.client = client
             self.connections += 1
             self._failing = False
@@ -263,6 +274,10 @@ class Bridge:
     # ----------------------------------------------------------------------------- commands
 
     def _on_message(self, msg: aiomqtt.Message) -> None:
+        payload = msg.payload
+        if isinstance(payload, (bytes, bytearray)) and len(payload) > MAX_PACKET:
+            self.oversized += 1  # a broker that ignored our Maximum Packet Size
+            return
         topic = str(msg.topic)
         if self.config.discovery_prefix and topic == f"{self.config.discovery_prefix}/status":
             if bytes(msg.payload or b"") == ONLINE.encode():  # Home Assistant (re)started
@@ -338,7 +353,7 @@ class Bridge:
                 self.outbox.forget(t)
         try:
             service = json.loads(bytes(payload)).get("service") if payload else None
-        except (ValueError, TypeError, AttributeError):
+        except (ValueError, TypeError, AttributeError, RecursionError):  # RecursionError: nested too deep
             service = None
         if isinstance(service, str) and service != self.config.service_id and key not in self.boards:
             if len(self.elsewhere) >= MAX_ELSEWHERE and key not in self.elsewhere:
