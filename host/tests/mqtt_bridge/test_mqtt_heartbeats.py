@@ -5,12 +5,14 @@ counter counts every time it heard nothing from the hub for that long."""
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
 from typing import Any
 
 import aiomqtt
 
 from hubwire.service import mqtt as bridge_mod
+from hubwire.service.inbound import Inbound
 from hubwire.service.mqtt import Bridge
 from hubwire.service.topics import BridgeConfig
 
@@ -88,3 +90,19 @@ def test_a_packet_over_the_limit_is_dropped_unread(cache_dir: str) -> None:
                                            3, None))
         assert bridge.oversized == 2 and bridge.elsewhere == {"elsewhere": "other"}
     run(main(), 30)
+
+
+def test_large_commands_cost_tokens_by_size_and_queued_bytes_are_bounded() -> None:
+    """A 1 MiB command costs as many tokens as 65 small ones, and the queue holds at most
+    ``max_bytes`` of payload: parsing what is taken stays bounded however large the commands."""
+    now = [0.0]
+    q: "Inbound[int]" = Inbound(256, 200.0, 200, 10.0, logging.getLogger("test"), clock=lambda: now[0],
+                                bytes_per_token=16 * 1024, max_bytes=3 << 20)
+    taken = sum(q.offer(i, 1 << 20) for i in range(10))
+    assert taken == 3  # 200 tokens, 65 each
+    assert q.bytes == 3 << 20 and q.dropped == 7
+    now[0] += 10.0  # the bucket is full again, but the queue holds max_bytes already
+    assert not q.offer(99, 1)
+    assert q.offer(100, 0)  # a command without payload still fits
+    assert not q.charge(1 << 30)  # more than the whole bucket
+    assert q.charge(1 << 20)
