@@ -4,7 +4,11 @@ Each flood runs for ``--seconds`` (default 10; ``--long``: 60) against a fresh s
 
 - ``subs``: one socket client asks for 20,000 event subscriptions while the board raises events;
 - ``mqtt``: an MQTT client publishes malformed ``set`` commands as fast as it can;
-- ``pipeline``: one socket client keeps 3,000 reads pipelined on the socket.
+- ``pipeline``: one socket client keeps 3,000 reads pipelined on the socket;
+- ``huge``: an MQTT client publishes a 16 MB JSON value to a ``set`` and a ``descriptor`` topic
+  every second;
+- ``large``: an MQTT client publishes 1 MB JSON values (just under the bridge's packet limit) to a
+  ``set`` and a ``descriptor`` topic as fast as it can.
 
 Reported per flood: the service's peak RSS (from /proc, sampled every 50 ms) against its RSS before
 the flood, the latency of a well-behaved socket client reading ``battery`` once every 100 ms
@@ -36,7 +40,7 @@ import aiomqtt
 
 from common import ROOT, emulator
 
-FLOODS = ("subs", "mqtt", "pipeline")
+FLOODS = ("subs", "mqtt", "pipeline", "huge", "large")
 
 
 def free_port() -> int:
@@ -147,6 +151,27 @@ async def flood_mqtt(path: str, port: int, stop: asyncio.Event) -> str:
     return f"{n} malformed set commands published"
 
 
+async def flood_huge(path: str, port: int, stop: asyncio.Event) -> str:
+    huge, n = b"[" + b"0," * 8_000_000 + b"0]", 0
+    async with aiomqtt.Client("127.0.0.1", port, protocol=aiomqtt.ProtocolVersion.V5) as c:
+        while not stop.is_set():
+            await c.publish("hubwire/rover/set/left", huge, qos=1)
+            await c.publish("hubwire/elsewhere/descriptor", huge, qos=1)
+            n += 2
+            await asyncio.sleep(1)
+    return f"{n} JSON values of 16 MB published"
+
+
+async def flood_large(path: str, port: int, stop: asyncio.Event) -> str:
+    large, n = b"[" + b"0," * 500_000 + b"0]", 0
+    async with aiomqtt.Client("127.0.0.1", port, protocol=aiomqtt.ProtocolVersion.V5) as c:
+        while not stop.is_set():
+            await c.publish("hubwire/rover/set/left", large, qos=1)
+            await c.publish("hubwire/elsewhere/descriptor", large, qos=1)
+            n += 2
+    return f"{n} JSON values of 1 MB published"
+
+
 async def flood_pipeline(path: str, port: int, stop: asyncio.Event) -> str:
     r, w = await connect(path)
     batches = answers = 0
@@ -176,7 +201,8 @@ async def run_flood(name: str, args: argparse.Namespace, sock: str, port: int, p
     stop = asyncio.Event()
     lat: List[float] = []
     good = asyncio.ensure_future(well_behaved(sock, stop, lat))
-    fl = asyncio.ensure_future({"subs": flood_subs, "mqtt": flood_mqtt, "pipeline": flood_pipeline}[name](
+    fl = asyncio.ensure_future({"subs": flood_subs, "mqtt": flood_mqtt, "pipeline": flood_pipeline,
+                                "huge": flood_huge, "large": flood_large}[name](
         sock, port, stop))
     await asyncio.sleep(args.seconds)
     stop.set()

@@ -1,9 +1,12 @@
 """The MQTT bridge's inbound commands: a bounded queue behind a rate limit (docs/MQTT.md "Limits").
 
 Anyone who may publish on the broker can send commands; a flood of them must not grow the
-service's memory nor starve the boards' heartbeats. A command is taken when the token bucket has
-a token and the queue has room, else dropped and counted (no reply: the sender may ask again); a
-warning says how many were dropped, at most once per ``log_interval`` seconds.
+service's memory nor starve the boards' heartbeats. A command costs one token per started
+``bytes_per_token`` of its payload (parsing a large one takes the loop longer); it is taken when
+the token bucket has that many and the queue has room (``size`` commands, ``max_bytes`` of
+payload), else dropped and counted (no reply: the sender may ask again); a warning says how many
+were dropped, at most once per ``log_interval`` seconds. :meth:`charge` spends tokens on other
+work the same senders cause (the bridge's parsing of descriptors).
 """
 from __future__ import annotations
 
@@ -11,7 +14,7 @@ import asyncio
 import logging
 import time
 from collections import deque
-from typing import Any, Callable, Deque, Generic, Optional, TypeVar
+from typing import Any, Callable, Deque, Generic, Optional, Tuple, TypeVar
 
 __all__ = ["Inbound"]
 
@@ -20,12 +23,16 @@ T = TypeVar("T")
 
 class Inbound(Generic[T]):
     def __init__(self, size: int, rate_hz: float, burst: int, log_interval: float, log: logging.Logger,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, bytes_per_token: int = 1 << 30,
+                 max_bytes: int = 1 << 62) -> None:
         self.size, self.rate_hz, self.burst = size, rate_hz, burst
+        self.bytes_per_token, self.max_bytes = bytes_per_token, max_bytes
+        #: payload bytes of the commands queued
+        self.bytes = 0
         self.log_interval = log_interval
         self._log = log
         self._clock = clock
-        self._q: Deque[T] = deque()
+        self._q: Deque[Tuple[T, int]] = deque()
         self._ready = asyncio.Event()
         self._tokens = float(burst)
         self._refilled = clock()
@@ -37,18 +44,31 @@ class Inbound(Generic[T]):
     def __len__(self) -> int:
         return len(self._q)
 
-    def offer(self, item: T) -> bool:
-        """Queue ``item``; False (dropped, counted) over the rate or with the queue full."""
-        self.received += 1
+    def _spend(self, nbytes: int) -> Optional[float]:
+        """Take the tokens ``nbytes`` cost; None when there are not enough (else the time now)."""
         now = self._clock()
         self._tokens = min(float(self.burst), self._tokens + (now - self._refilled) * self.rate_hz)
         self._refilled = now
-        if self._tokens < 1.0 or len(self._q) >= self.size:
+        cost = 1.0 + nbytes // self.bytes_per_token
+        if self._tokens < cost:
+            return None
+        self._tokens -= cost
+        return now
+
+    def charge(self, nbytes: int) -> bool:
+        """Spend the tokens ``nbytes`` of other work cost; False (nothing spent): skip that work."""
+        return self._spend(nbytes) is not None
+
+    def offer(self, item: T, nbytes: int = 0) -> bool:
+        """Queue ``item`` (``nbytes`` of payload); False (dropped, counted) over the rate or with the
+        queue full."""
+        self.received += 1
+        if len(self._q) >= self.size or self.bytes + nbytes > self.max_bytes or self._spend(nbytes) is None:
             self.dropped += 1
-            self._note_drop(now)
+            self._note_drop(self._clock())
             return False
-        self._tokens -= 1.0
-        self._q.append(item)
+        self._q.append((item, nbytes))
+        self.bytes += nbytes
         self.accepted += 1
         self.peak = max(self.peak, len(self._q))
         self._ready.set()
@@ -66,7 +86,9 @@ class Inbound(Generic[T]):
         while not self._q:
             self._ready.clear()
             await self._ready.wait()
-        return self._q.popleft()
+        item, nbytes = self._q.popleft()
+        self.bytes -= nbytes
+        return item
 
     def stats(self) -> Any:
         return {"received": self.received, "accepted": self.accepted, "dropped": self.dropped, "peak": self.peak}

@@ -16,6 +16,7 @@ import ssl
 from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Sequence, Set, Tuple
 
 import aiomqtt
+from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from .board import BoardBridge
@@ -46,14 +47,51 @@ INBOUND_QUEUE = 256
 #: commands taken per second, on average, and in one burst; beyond it they are dropped (and counted)
 INBOUND_RATE_HZ = 200.0
 INBOUND_BURST = 200
+#: a command costs one token more for each of these bytes of payload (parsing it takes longer)
+INBOUND_BYTES_PER_TOKEN = 16 * 1024
+#: payload bytes of the commands waiting for a worker; beyond it they are dropped (and counted)
+INBOUND_BYTES = 4 << 20
 #: commands carried out at once (each waits for its board)
 WORKERS = 8
 #: a warning about dropped commands at most this often, seconds
 DROP_LOG_INTERVAL_S = 10.0
-#: messages aiomqtt holds before the bridge takes them (the bridge takes them at once)
+#: messages aiomqtt holds before the bridge takes them (the bridge takes them at once), and their
+#: payload bytes; beyond either it drops them
 CLIENT_QUEUE = 4 * INBOUND_QUEUE
+CLIENT_BYTES = 8 << 20
 #: boards of other services remembered (from their retained descriptors)
 MAX_ELSEWHERE = 4096
+#: the largest MQTT packet the bridge takes, bytes (as a socket client's line, docs/SERVICE.md
+#: "Limits"): the broker is told so at connect and drops larger ones for us (MQTT 5 Maximum Packet
+#: Size), and one that comes anyway is dropped unread. Parsing a value of many megabytes holds the
+#: loop long enough for the boards to miss their heartbeats; the largest command (a 65,535-byte
+#: value as JSON) is far below it.
+MAX_PACKET = 1 << 20
+
+
+def _size(msg: aiomqtt.Message) -> int:
+    return len(msg.payload) if isinstance(msg.payload, (bytes, bytearray)) else 0
+
+
+class ClientQueue(asyncio.Queue[aiomqtt.Message]):
+    """aiomqtt's queue of messages for the bridge, full at CLIENT_QUEUE messages or CLIENT_BYTES of
+    payload (aiomqtt drops a message that finds it full)."""
+
+    def __init__(self, maxsize: int = 0) -> None:
+        super().__init__(maxsize)
+        self.bytes = 0
+
+    def full(self) -> bool:
+        return super().full() or self.bytes >= CLIENT_BYTES
+
+    def _put(self, item: aiomqtt.Message) -> None:
+        self.bytes += _size(item)
+        super()._put(item)
+
+    def _get(self) -> aiomqtt.Message:
+        item: aiomqtt.Message = super()._get()
+        self.bytes -= _size(item)
+        return item
 
 
 class BoardLike(Protocol):
@@ -110,7 +148,8 @@ class Bridge:
         self.reply_prefixes: Tuple[str, ...] = tuple(
             p if p.endswith("/") else p + "/" for p in (reply_prefixes or (self.topics.prefix,)))
         self.inbound: "Inbound[Tuple[aiomqtt.Message, str, str, Optional[str]]]" = Inbound(
-            INBOUND_QUEUE, INBOUND_RATE_HZ, INBOUND_BURST, DROP_LOG_INTERVAL_S, log)
+            INBOUND_QUEUE, INBOUND_RATE_HZ, INBOUND_BURST, DROP_LOG_INTERVAL_S, log,
+            bytes_per_token=INBOUND_BYTES_PER_TOKEN, max_bytes=INBOUND_BYTES)
         self.outbox = Outbox(config.event_backlog)
         #: names this run of the bridge in event ids, so ids never repeat across restarts
         self.run_id = secrets.token_hex(4)
@@ -124,6 +163,8 @@ class Bridge:
         self.retired = Retired(self.topics, config.service_id)
         self._tasks: Set["asyncio.Task[Any]"] = set()
         self._failing = False
+        #: messages over MAX_PACKET that came although the broker was told (dropped unread)
+        self.oversized = 0
         #: commands refused for their reply topic; when that was last logged
         self.refusals = 0
         self._refusal_logged_at: Optional[float] = None
@@ -158,12 +199,15 @@ class Bridge:
     async def _session(self) -> None:
         status = self.topics.service_status(self.config.service_id)
         will = aiomqtt.Will(status, OFFLINE, qos=1, retain=True)
+        connect = Properties(PacketTypes.CONNECT)  # type: ignore[no-untyped-call]
+        connect.MaximumPacketSize = MAX_PACKET
         async with aiomqtt.Client(self.host, self.port, identifier=f"hubwire-{self.config.service_id}",
                                   protocol=aiomqtt.ProtocolVersion.V5, will=will, clean_start=True,
                                   keepalive=self.config.keepalive, username=self.username,
                                   password=self.password, socket_options=NODELAY,
                                   tls_context=self.tls_context, logger=_client_log,
-                                  max_queued_incoming_messages=CLIENT_QUEUE) as client:
+                                  max_queued_incoming_messages=CLIENT_QUEUE, queue_type=ClientQueue,
+                                  properties=connect) as client:
             self.client = client
             self.connections += 1
             self._failing = False
@@ -263,6 +307,10 @@ class Bridge:
     # ----------------------------------------------------------------------------- commands
 
     def _on_message(self, msg: aiomqtt.Message) -> None:
+        payload = msg.payload
+        if isinstance(payload, (bytes, bytearray)) and len(payload) > MAX_PACKET:
+            self.oversized += 1  # a broker that ignored our Maximum Packet Size
+            return
         topic = str(msg.topic)
         if self.config.discovery_prefix and topic == f"{self.config.discovery_prefix}/status":
             if bytes(msg.payload or b"") == ONLINE.encode():  # Home Assistant (re)started
@@ -270,6 +318,9 @@ class Bridge:
                     b.publish_discovery(force=True)
             return
         if topic.endswith("/descriptor"):
+            n = len(payload) if isinstance(payload, (bytes, bytearray)) else 0
+            if n > INBOUND_BYTES_PER_TOKEN and not self.inbound.charge(n):
+                return  # large ones share the commands' rate (a flood of them would hold the loop)
             self._note_descriptor(topic, msg.payload)
             return
         parsed = self.topics.parse_command(topic)
@@ -278,7 +329,7 @@ class Bridge:
         key, op, channel = parsed
         if key not in self.boards and key in self.elsewhere:
             return  # a board of another service on this broker: that one answers
-        self.inbound.offer((msg, key, op, channel))
+        self.inbound.offer((msg, key, op, channel), len(payload) if isinstance(payload, (bytes, bytearray)) else 0)
 
     async def _worker(self) -> None:
         while True:
@@ -338,7 +389,7 @@ class Bridge:
                 self.outbox.forget(t)
         try:
             service = json.loads(bytes(payload)).get("service") if payload else None
-        except (ValueError, TypeError, AttributeError):
+        except (ValueError, TypeError, AttributeError, RecursionError):  # RecursionError: nested too deep
             service = None
         if isinstance(service, str) and service != self.config.service_id and key not in self.boards:
             if len(self.elsewhere) >= MAX_ELSEWHERE and key not in self.elsewhere:

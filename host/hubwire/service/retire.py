@@ -38,7 +38,7 @@ class Retired:
         its board is served under another key (``boards``: ``(key, (name, board id))`` of ours)."""
         try:
             body = json.loads(bytes(payload)) if payload else None
-        except (ValueError, TypeError):
+        except (ValueError, TypeError, RecursionError):  # RecursionError: nested too deep
             return []
         if not isinstance(body, dict) or body.get("service") != self.service_id:
             self._waiting.pop(key, None)

@@ -145,3 +145,25 @@ def test_a_command_flood_is_bounded_and_counted(broker: Broker, emulators, cache
                 assert 1 <= len(drops) <= 1 + elapsed / bridge_mod.DROP_LOG_INTERVAL_S
         await fleet.close()
     run(main(), 240)
+
+
+@pytest.mark.parametrize("topic", ["hubwire/elsewhere/descriptor", "hubwire/rover/set/left"])
+def test_deeply_nested_json_is_refused_and_the_bridge_stays(broker: Broker, emulators,  # type: ignore[no-untyped-def]
+                                                            cache_dir: str, topic: str) -> None:
+    emu, = emulators(1)
+
+    async def main() -> None:
+        fleet = StandInFleet(cache_dir)
+        await fleet.plug("rover", emu.link)
+        async with running_bridge(fleet, broker.port) as bridge:
+            async with watcher(broker.port, "hubwire/rover/error") as w:
+                # nested deeper than Python's JSON decoder recurses: RecursionError, not ValueError
+                await w.client.publish(topic, b"[" * 200_000, qos=1)
+                await asyncio.sleep(0.5)
+                assert await w.request("hubwire/rover/read/battery", "", timeout=10) == {"ok": True, "value": 7400}
+                assert bridge.connections == 1, "the bridge lost its broker session over one message"
+                if "/set/" in topic:  # the sender is told its value is no JSON
+                    await w.wait_for(lambda: any(e.get("error") in TYPED for e in w.on("hubwire/rover/error")),
+                                     10, "a typed error")
+        await fleet.close()
+    run(main(), 120)
