@@ -120,6 +120,11 @@ class ReadPlan:
         else:
             self.value = self.asm.add(self.asked, a.payload)
             self.tries = None
+            if self.value is None and time.monotonic() > self.deadline:
+                # answers keep coming but no whole value checks (a value that never holds still, or
+                # a device whose windows do not match their hash): the read ends by its deadline too
+                raise Timeout(f"no whole value of {self.what or self.ch.id} on {self.core.url} by its "
+                              f"deadline ({self.asm.restarts} changes of the value seen)")
 
     def failed(self, e: BaseException) -> None:
         """A transaction ended without an answer: raises ``e`` unless the read goes on."""
