@@ -169,18 +169,22 @@ def test_hub_events_survive_kill9_of_the_service(serve: Serve, soak: Emulator) -
     c.close()
     serve.start()
     c = ready_client(serve, "soak")
-
-    def read(ch: str) -> int:
-        r = c.request("read", board="soak", channel=ch)
-        assert "value" in r, (r, serve.log_text()[-3000:])
-        return int(r["value"])
-    wait_for(lambda: read("tick_last") == n, 60, f"tick {n} applied")
-    counts = {ch: read(ch) for ch in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")}
+    counts = _tick_counts(serve, c, n)
     print(f"hub events: {n} accepted, device counts {counts}")
     assert counts["tick_first"] == 1 and counts["tick_gaps"] == 0, counts
     assert counts["tick_twice"] == 0, f"{counts['tick_twice']} hub event applied twice: {counts}"
     assert counts["ticks"] == n, counts
     c.close()
+
+
+def _tick_counts(serve: Serve, c: Any, n: int) -> Dict[str, int]:
+    """Once the board applied hub event ``n``: its own counts of the ticks it applied."""
+    def read(ch: str) -> int:
+        r = c.request("read", board="soak", channel=ch)
+        assert "value" in r, (r, serve.log_text()[-3000:])
+        return int(r["value"])
+    wait_for(lambda: read("tick_last") == n, 60, f"tick {n} applied")
+    return {ch: read(ch) for ch in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")}
 
 
 def test_hub_events_after_kill9_and_a_board_reboot(serve: Serve, soak: Emulator) -> None:
@@ -201,13 +205,7 @@ def test_hub_events_after_kill9_and_a_board_reboot(serve: Serve, soak: Emulator)
     soak.start()  # its counters start again from 0
     serve.start()
     c = ready_client(serve, "soak")
-
-    def read(ch: str) -> int:
-        r = c.request("read", board="soak", channel=ch)
-        assert "value" in r, (r, serve.log_text()[-3000:])
-        return int(r["value"])
-    wait_for(lambda: read("tick_last") == n, 60, f"tick {n} applied")
-    counts = {ch: read(ch) for ch in ("ticks", "tick_first", "tick_last", "tick_twice", "tick_gaps")}
+    counts = _tick_counts(serve, c, n)
     print(f"hub events across a board reboot: {n} accepted, {before} applied before it, device counts "
           f"after it {counts}")
     assert counts["tick_first"] in (before, before + 1), (before, counts)  # the one in flight, or the next
