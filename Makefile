@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
+.PHONY: all setup test test-cpp test-avr-core test-compile-errors test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -35,7 +35,7 @@ uno-firmware:
 	  $(BUILD)/uno/MinimalBoardId >/dev/null
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
+	$(MAKE) test-cpp test-avr-core test-compile-errors test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -50,6 +50,11 @@ test-avr-core:
 	    -Itest/support -DHUBWIRE_PORT_HEADER='"port_bare.h"' -c $$f -o $(BUILD)/avr-core/$$(basename $$f).o || exit 1; \
 	done
 	@echo "test-avr-core: $(words $(CORE_SOURCES)) files compile for atmega328p with -Wall -Wextra -Werror"
+
+# A first sketch's declaration mistakes, compiled for the Uno as the Arduino IDE does: each message
+# names the channel and the mistake in at most 20 lines (test/compile_fail/first_sketch.sh).
+test-compile-errors:
+	bash test/compile_fail/first_sketch.sh $(BUILD)/compile-errors
 
 # Every example for the AVR boards, then the benchmark sketches under extras/ for the Uno.
 test-examples:

@@ -130,6 +130,17 @@ bool startWide(Frameful) { return true; }
 #define CASE , action("two", twoWords)
 #elif HUBWIRE_CASE == 43
 #define CASE , expose("nan", ratio).writable().range(__builtin_nanf(""), 1.0f)  // float ranges rely on this
+// 44..48: the mistakes a first sketch makes (on the Uno an int is 16 bits: -1 once passed for 65535).
+#elif HUBWIRE_CASE == 44
+#define CASE , expose("minus", level).writable().failsafe(-1)  // a uint16_t has no -1
+#elif HUBWIRE_CASE == 45
+#define CASE , expose("out", level).writable().range(100, 900).failsafe(50)
+#elif HUBWIRE_CASE == 46
+#define CASE , expose("out", level).writable().failsafe(50).range(100, 900)  // either order
+#elif HUBWIRE_CASE == 47
+#define CASE , expose("neg", level).writable().range(-5, 900)  // not "min is greater than max"
+#elif HUBWIRE_CASE == 48
+#define CASE , expose("s2", text).failsafe(0)  // strings have no failsafe
 #else
 #define CASE
 #endif

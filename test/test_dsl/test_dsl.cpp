@@ -95,12 +95,28 @@ TEST(Dsl, ControlsActionsAndEvents) {
 }
 
 TEST(Dsl, ValuesThatDoNotFitAndRangesOutOfOrderAreMarked) {
-  EXPECT_TRUE(expose("level", level).range(0, 255).valuesFit());
-  EXPECT_FALSE(expose("level", level).range(0, 300).valuesFit());
-  EXPECT_FALSE(expose("level", level).writable().failsafe(-1).valuesFit());
-  EXPECT_TRUE(expose("speed", speed).range(0.1, 0.2).valuesFit());  // a float rounds
-  EXPECT_TRUE(expose("level", level).range(1, 5).rangeOrdered());
-  EXPECT_FALSE(expose("level", level).range(5, 1).rangeOrdered());
+  EXPECT_EQ(expose("level", level).range(0, 255).mistake(), kNoMistake);
+  EXPECT_EQ(expose("level", level).range(0, 300).mistake(), kRangeValue);
+  EXPECT_EQ(expose("level", level).range(-1, 200).mistake(), kRangeValue);  // not "min > max"
+  EXPECT_EQ(expose("level", level).writable().failsafe(-1).mistake(), kFailsafeValue);
+  EXPECT_EQ(expose("speed", speed).range(0.1, 0.2).mistake(), kNoMistake);  // a float rounds
+  EXPECT_EQ(expose("level", level).range(1, 5).mistake(), kNoMistake);
+  EXPECT_EQ(expose("level", level).range(5, 1).mistake(), kRangeOrder);
+  EXPECT_EQ(expose("level", level).writable().range(1, 5).failsafe(6).mistake(), kFailsafeOutsideRange);
+  EXPECT_EQ(expose("level", level).writable().failsafe(0).range(1, 5).mistake(), kFailsafeOutsideRange);
+  EXPECT_EQ(expose("level", level).writable().failsafe(5).range(1, 5).mistake(), kNoMistake);
+  EXPECT_EQ(expose("2level", level).mistake(), kBadName);
+  // The first mistake is the one reported.
+  EXPECT_EQ(expose("level", level).range(5, 1).failsafe(300).mistake(), kRangeOrder);
+}
+
+// On the Uno an int has 16 bits: (int)(uint16_t)-1 == -1 there, so the sign is compared too.
+TEST(Dsl, ANegativeValueNeverFitsAnUnsignedType) {
+  EXPECT_FALSE(Limits<uint16_t>::fits((int16_t)-1));
+  EXPECT_FALSE(Limits<uint32_t>::fits((int32_t)-1));
+  EXPECT_FALSE(Limits<int16_t>::fits((uint16_t)40000));
+  EXPECT_TRUE(Limits<uint16_t>::fits((int16_t)5));
+  EXPECT_TRUE(Limits<int16_t>::fits((uint16_t)5));
 }
 
 TEST(Dsl, WhetherAFunctionIsCalledIsKnownFromTheDeclaration) {

@@ -80,9 +80,13 @@ TEST(Tables, NameAndTextChecks) {
   EXPECT_TRUE(shortText(std::string(255, 'a').c_str()));
   EXPECT_FALSE(shortText(std::string(256, 'a').c_str()));
   constexpr auto l = declared("d", expose("level", level), expose("level", level));
-  EXPECT_FALSE(namesUnique(l.list));
+  EXPECT_EQ(firstMistake(l.list), 0u);  // the first of the two is reported
+  EXPECT_EQ(mistakeAt(l.list, 0), kSameName);
   constexpr auto m = declared("d", expose("level", level), event("press", press));
-  EXPECT_TRUE(namesUnique(m.list));
+  EXPECT_EQ(firstMistake(m.list), 2u);  // none: the list's size
+  constexpr auto n = declared("d", expose("level", level), event("press", press), expose("bad", level).range(2, 1));
+  EXPECT_EQ(firstMistake(n.list), 2u);
+  EXPECT_STREQ(nameAt(n.list, 2), "bad");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "channel.h"
 #include "../features.h"
 #include "json.h"
+#include "mistakes.h"
 
 namespace hubwire {
 namespace declare {
@@ -41,9 +42,6 @@ struct IsNumeric<StructValue> {
 // kMission: a long action (mission.h).
 enum Kind : uint8_t { kVariable, kControl, kAction, kEvent, kMission, kRemote, kRemoteAction, kRemoteEvent };
 
-// Set while declaring when a range or failsafe value changes on its way into the channel's type
-// (300 for a uint8_t, -1.5 for an int16_t); Checked<> turns it into a compile error.
-const uint8_t kLossyValue = 0x80;
 // Set by onChange(): whether a function is called is known from the declaration alone, so the
 // function may be declared before HUBWIRE_CHANNELS and defined after it (GCC 5 cannot compare the
 // address of a function not yet defined with nullptr while compiling).
@@ -64,6 +62,10 @@ struct IsFloat<double> {
   static const bool value = true;
 };
 
+// x < 0 written so that an unsigned X draws no "always false" warning.
+template <typename X>
+constexpr bool negative(X x) { return !(x > 0) && !(x == 0); }
+
 // A range's or failsafe's value as stored, and the comparison the session uses for it.
 template <typename T>
 struct Limits {
@@ -71,9 +73,13 @@ struct Limits {
   static constexpr Scalar bound(T v) { return ToScalar<T>::bound(v); }
   static constexpr InRange inRange(uint8_t flags) { return flags & (kHasRange | kHasFailsafe) ? &hubwire::inRange<T> : nullptr; }
   static constexpr bool ordered(T lo, T hi) { return lo <= hi; }
-  // A float channel rounds (0.1 has no exact float); an integer one must keep the value.
+  static constexpr bool within(T v, T lo, T hi) { return lo <= v && v <= hi; }
   template <typename U>
-  static constexpr bool fits(U v) { return IsFloat<T>::value || (U)(T)v == v; }
+  static constexpr T cast(U v) { return (T)v; }
+  // A float channel rounds (0.1 has no exact float); an integer one must keep the value and its
+  // sign (on the Uno an int is 16 bits: (int)(uint16_t)-1 == -1).
+  template <typename U>
+  static constexpr bool fits(U v) { return IsFloat<T>::value || ((U)(T)v == v && negative(v) == negative((T)v)); }
 };
 template <>
 struct Limits<NotNumeric> {
@@ -81,11 +87,17 @@ struct Limits<NotNumeric> {
   static constexpr Scalar bound(NotNumeric) { return Scalar(Scalar::Bits(), 0); }
   static constexpr InRange inRange(uint8_t) { return nullptr; }
   static constexpr bool ordered(NotNumeric, NotNumeric) { return true; }
+  static constexpr bool within(NotNumeric, NotNumeric, NotNumeric) { return true; }
+  template <typename U>
+  static constexpr NotNumeric cast(U) { return NotNumeric(); }
   template <typename U>
   static constexpr bool fits(U) { return true; }
 };
 template <>
-struct Limits<StructValue> : Limits<NotNumeric> {};
+struct Limits<StructValue> : Limits<NotNumeric> {
+  template <typename U>
+  static constexpr StructValue cast(U) { return StructValue(); }
+};
 
 // A range or failsafe a channel does not have writes nothing.
 constexpr Piece number(const char*, NotNumeric) { return empty(); }
@@ -122,20 +134,27 @@ class Decl {
   template <typename U>
   constexpr Decl range(U min, U max) const {
     static_assert(K != kEvent, "range(): an event has no range (the sketch sets its value)");
-    static_assert(K == kEvent || IsNumeric<T>::value, "range(): only a number (or an array of numbers) has a range");
-    return Decl(*this, unit_, description_, access_,
-                (uint8_t)(flags_ | kHasRange | (Limits<T>::fits(min) && Limits<T>::fits(max) ? 0 : kLossyValue)),
-                (T)min, (T)max, failsafe_, call_);
+    // A value the type cannot hold is named first: -5 for a uint16_t would read as 65531 > max.
+    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kHasRange), Limits<T>::cast(min),
+                Limits<T>::cast(max), failsafe_, call_,
+                !IsNumeric<T>::value ? kRangeOnText
+                : !(Limits<T>::fits(min) && Limits<T>::fits(max)) ? kRangeValue
+                : !Limits<T>::ordered(Limits<T>::cast(min), Limits<T>::cast(max)) ? kRangeOrder
+                : (flags_ & kHasFailsafe) && !Limits<T>::within(failsafe_, Limits<T>::cast(min), Limits<T>::cast(max))
+                    ? kFailsafeOutsideRange
+                    : kNoMistake);
   }
   /// The unit the hub shows.
   ///   expose("range", rangeCm).unit("cm")
   constexpr Decl unit(const char* u) const {
-    return Decl(*this, u, description_, access_, flags_, lo_, hi_, failsafe_, call_);
+    return Decl(*this, shortText(u) ? u : "", description_, access_, flags_, lo_, hi_, failsafe_, call_,
+                shortText(u) ? kNoMistake : kLongText);
   }
   /// A description the hub shows.
   ///   action("beep", beep).describe("beep for ms (max 2000)")
   constexpr Decl describe(const char* d) const {
-    return Decl(*this, unit_, d, access_, flags_, lo_, hi_, failsafe_, call_);
+    return Decl(*this, unit_, shortText(d) ? d : "", access_, flags_, lo_, hi_, failsafe_, call_,
+                shortText(d) ? kNoMistake : kLongText);
   }
   /// When the link is lost the variable (every element of an array) is set to this, or the
   /// control's function is called with it.
@@ -144,11 +163,13 @@ class Decl {
   constexpr Decl failsafe(U value) const {
     static_assert(K != kMission, "failsafe(): a mission has no failsafe value (stop it in the sketch's onLinkLost())");
     static_assert(K == kVariable || K == kControl || K == kMission, "failsafe(): only a variable or a control has a failsafe value");
-    static_assert(!(K == kVariable || K == kControl) || IsNumeric<T>::value,
-                  "failsafe(): only a number (or an array of numbers) has a failsafe value");
-    return Decl(*this, unit_, description_, access_,
-                (uint8_t)(flags_ | kHasFailsafe | (Limits<T>::fits(value) ? 0 : kLossyValue)), lo_, hi_, (T)value,
-                call_);
+    return Decl(*this, unit_, description_, access_, (uint8_t)(flags_ | kHasFailsafe), lo_, hi_, Limits<T>::cast(value),
+                call_,
+                !IsNumeric<T>::value ? kFailsafeOnText
+                : isListCode(code_) ? kListFailsafe
+                : !Limits<T>::fits(value) ? kFailsafeValue
+                : (flags_ & kHasRange) && !Limits<T>::within(Limits<T>::cast(value), lo_, hi_) ? kFailsafeOutsideRange
+                                                                                          : kNoMistake);
   }
   /// Called after the hub wrote a new value into the variable (kept where a control's function is).
   ///   expose("led", led).writable().onChange(ledChanged)
@@ -181,10 +202,10 @@ class Decl {
   constexpr Decl(const char* name, const char* layout, void* data, TypeCode code, uint8_t count,
                  TypeCode ret, uint8_t access, Call call, Thunk thunk, uint16_t memSize = 0, uint8_t retCount = 0,
                  TypeCode progress = kVoid)
-      : memSize_(memSize), retCount_(retCount), progress_(progress), progressMax_(0), name_(name), layout_(layout),
+      : memSize_(memSize), retCount_(retCount), progress_(progress), progressMax_(0), name_(shortText(name) ? name : "_"), layout_(layout),
         unit_(nullptr), description_(nullptr), data_(data),
         call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
-        flags_(0), lo_(), hi_(), failsafe_() {}
+        flags_(0), mistake_(validName(name) ? kNoMistake : kBadName), lo_(), hi_(), failsafe_() {}
 
   // The k-th piece of this channel's JSON, as channel id.
   constexpr Piece piece(uint8_t k, uint8_t id) const {
@@ -225,9 +246,8 @@ class Decl {
   constexpr bool hasLimits() const { return flags_ & (kHasRange | kHasFailsafe); }
   constexpr const char* unitText() const { return unit_; }
   constexpr const char* descriptionText() const { return description_; }
-  constexpr bool valuesFit() const { return !(flags_ & kLossyValue); }
-  constexpr bool rangeOrdered() const { return !(flags_ & kHasRange) || Limits<T>::ordered(lo_, hi_); }
   constexpr const char* layout() const { return layout_; }
+  constexpr Mistake mistake() const { return mistake_; }
   constexpr const char* name() const { return name_; }
   constexpr Call call() const { return call_; }
   // Does the session call a function for this channel: a control's or action's, or onChange()'s?
@@ -249,7 +269,6 @@ class Decl {
                ? wireBytes()
                : 0;
   }
-  constexpr bool listWithFailsafe() const { return isListCode(code_) && (flags_ & kHasFailsafe); }
   // The session's features this channel needs (features.h).
   constexpr uint16_t features() const {
     return (uint16_t)((access_ & kStreamable ? kUsesStreams : 0) | (flags_ & kHasFailsafe ? kUsesFailsafes : 0) |
@@ -264,18 +283,20 @@ class Decl {
   }
 
  private:
+  // mistake: one this option made (mistakes.h); the first one made is kept.
   constexpr Decl(const Decl& d, const char* unit, const char* description, uint8_t access, uint8_t flags, T lo, T hi,
-                 T failsafe, Call call)
+                 T failsafe, Call call, Mistake mistake = kNoMistake)
       : memSize_(d.memSize_), retCount_(d.retCount_), progress_(d.progress_), progressMax_(d.progressMax_), name_(d.name_),
         layout_(d.layout_), unit_(unit), description_(description), data_(d.data_),
         call_(call), thunk_(d.thunk_), code_(d.code_), count_(d.count_),
-        ret_(d.ret_), access_(access), flags_(flags), lo_(lo), hi_(hi), failsafe_(failsafe) {}
+        ret_(d.ret_), access_(access), flags_(flags), mistake_(d.mistake_ ? d.mistake_ : mistake), lo_(lo), hi_(hi),
+        failsafe_(failsafe) {}
   constexpr Decl(const Decl& d, float progressMax)
       : memSize_(d.memSize_), retCount_(d.retCount_), progress_(d.progress_), progressMax_(progressMax), name_(d.name_),
         layout_(d.layout_),
         unit_(d.unit_), description_(d.description_), data_(d.data_), call_(d.call_), thunk_(d.thunk_), code_(d.code_),
-        count_(d.count_), ret_(d.ret_), access_(d.access_), flags_((uint8_t)(d.flags_ | kHasProgressMax)), lo_(d.lo_),
-        hi_(d.hi_), failsafe_(d.failsafe_) {}
+        count_(d.count_), ret_(d.ret_), access_(d.access_), flags_((uint8_t)(d.flags_ | kHasProgressMax)),
+        mistake_(d.mistake_), lo_(d.lo_), hi_(d.hi_), failsafe_(d.failsafe_) {}
 
   uint16_t memSize_;  // structs: sizeof the struct, to check the layout against
   uint8_t retCount_;  // an action returning a List: its capacity ("rvc")
@@ -293,6 +314,7 @@ class Decl {
   TypeCode ret_;
   uint8_t access_;
   uint8_t flags_;
+  Mistake mistake_;
   T lo_, hi_, failsafe_;
 };
 

@@ -20,6 +20,7 @@
 #include "remote.h"
 #include "tables.h"
 #include "hub_table.h"
+#include "report.h"
 #include "../session/fragments.h"
 
 // The <false, tag> specialisations below exist only to keep the macro's text the same for every
@@ -42,6 +43,8 @@
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
   constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
+  static_assert(::hubwire::declare::Report<decltype(declared), &declared, false>::ok &&                  \
+                ::hubwire::declare::Report<decltype(declared), &declared, true>::ok, "");                     \
   /* the hub channels' values pass through the same value code (strings, structs) */               \
   constexpr uint16_t features =                                                                    \
       (uint16_t)(::hubwire::declare::featuresOf(declared.list) | ::hubwire::declare::featuresOf(declared.hub)); \

@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "constexpr_text.h"
 #include "decl.h"
 
 namespace hubwire {
@@ -161,6 +162,13 @@ struct Pick<Remote, H, R...> {
   typedef typename Add::type type;
   static constexpr type make(const H& h, const R&... r) { return Add::make(h, Rest::make(r...)); }
 };
+
+// Is no channel in l called name? (report.h: two channels of one name are a mistake.)
+constexpr bool noneNamed(const List<>&, const char*) { return true; }
+template <typename H, typename... R>
+constexpr bool noneNamed(const List<H, R...>& l, const char* name) {
+  return !cx::equal(l.head.name(), name) && noneNamed(l.tail, name);
+}
 
 template <typename... D>
 constexpr Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type> declared(DeviceName dev, D... d) {

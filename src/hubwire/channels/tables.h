@@ -17,20 +17,6 @@
 namespace hubwire {
 namespace declare {
 
-// Names as the descriptor allows them (docs/PROTOCOL.md 7): [A-Za-z_][A-Za-z0-9_]*, 1..32 long.
-constexpr bool nameStart(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; }
-constexpr bool nameRest(const char* s, size_t n = 1) {
-  return *s == 0 ? n <= 32 : (nameStart(*s) || (*s >= '0' && *s <= '9')) && nameRest(s + 1, n + 1);
-}
-constexpr bool validName(const char* s) { return nameStart(*s) && nameRest(s + 1); }
-
-// Texts (units, descriptions, names) are worked on by recursion, one level per character: past
-// kMaxText the compiler would stop with an unclear "evaluation depth" error, so they are checked
-// first, four characters a level.
-const size_t kMaxText = 255;
-constexpr bool shortText(const char* s, size_t n = 0) {
-  return !s || n > kMaxText ? !s : !s[n] || !s[n + 1] || !s[n + 2] || !s[n + 3] || shortText(s, n + 4);
-}
 template <typename T, Kind K, typename C>
 constexpr bool textsShort(const Decl<T, K, C>& d) {
   return shortText(d.name()) && shortText(d.unitText()) && shortText(d.descriptionText()) && shortText(d.layout());
@@ -39,18 +25,6 @@ constexpr bool allTextsShort(const List<>&) { return true; }
 template <typename H, typename... R>
 constexpr bool allTextsShort(const List<H, R...>& l) {
   return textsShort(l.head) && allTextsShort(l.tail);
-}
-
-// Is no channel in l called name? Are all names in l different?
-constexpr bool noneNamed(const List<>&, const char*) { return true; }
-template <typename H, typename... R>
-constexpr bool noneNamed(const List<H, R...>& l, const char* name) {
-  return !cx::equal(l.head.name(), name) && noneNamed(l.tail, name);
-}
-constexpr bool namesUnique(const List<>&) { return true; }
-template <typename H, typename... R>
-constexpr bool namesUnique(const List<H, R...>& l) {
-  return noneNamed(l.tail, l.head.name()) && namesUnique(l.tail);
 }
 
 // The i-th declaration of a list (0-based).
@@ -254,17 +228,6 @@ constexpr bool isStruct(const Decl<T, K, C>*) { return false; }
 template <Kind K, typename C>
 constexpr bool isStruct(const Decl<StructValue, K, C>*) { return true; }
 
-// What is checked of every channel (the compiler's message names the channel's index I, from 0).
-template <typename D, const D* Decls, size_t I>
-struct Checked {
-  static_assert(validName(DeclAt<D, Decls, I>::decl.name()),
-                "channel name: letters, digits and _ only, not starting with a digit, at most 32 characters");
-  static_assert(DeclAt<D, Decls, I>::decl.rangeOrdered(), "range(min, max): min is greater than max");
-  static_assert(!DeclAt<D, Decls, I>::decl.listWithFailsafe(), "failsafe(): a List has no failsafe value");
-  static_assert(DeclAt<D, Decls, I>::decl.valuesFit(),
-                "range() or failsafe(): a value the channel's type cannot hold (e.g. 300 for a uint8_t, 1.5 for an int)");
-};
-
 // The flash copies a record points to: a struct's layout, the function called (with its own type),
 // range and failsafe values. Each is a base of the channel's Extra, empty where it does not apply,
 // so the sketch's one object of them all (Extras, HUBWIRE_CHANNELS defines it) holds only what does.
@@ -320,7 +283,7 @@ struct Extras<D, Decls, cx::Seq<I, R...> > : Extra<D, Decls, I>, Extras<D, Decls
 };
 
 template <typename D, const D* Decls, size_t I>
-struct InfoOf : Checked<D, Decls, I> {
+struct InfoOf {
   static constexpr ChannelInfo make(const Extra<D, Decls, I>& e) {
     return DeclAt<D, Decls, I>::decl.info(e.layout(), e.call(), e.limits());
   }
@@ -372,9 +335,7 @@ constexpr ChannelTable table(const typename Stored<D, Decls>::JsonType& json,
                              const typename Stored<D, Decls>::InfosType& infos) {
   static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
                 "a name, unit, description, layout or firmware text longer than 255 characters");
-  static_assert(namesUnique(Decls->list), "two channels have the same name");
   static_assert(allTextsShort(Decls->hub), "a hub channel's name, unit or description longer than 255 characters");
-  static_assert(namesUnique(Decls->hub), "two hub channels have the same name");
   static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
   static_assert(sizeof(JsonAndDigest<D, Decls>) == kHelloFixed + kDigestSize + sizeof(JsonText<D, Decls>),
                 "hello's fixed fields, the digest and the JSON lie end to end");
