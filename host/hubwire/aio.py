@@ -51,7 +51,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     this loop).
     """
     if transport is None:
-        from .service.route import RoutedConnecting  # through hubwire serve where it applies
+        from .client.route import RoutedConnecting  # through hubwire serve where it applies
 
         return RoutedConnecting(url, baudrate, timeout, kwargs)
     return _Connecting(transport, timeout, kwargs)

@@ -42,7 +42,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
             rover.left = 0.5
     """
     if transport is None:
-        from .service.route import open_routed  # a board name, or a port hubwire serve owns
+        from .client.route import open_routed  # a board name, or a port hubwire serve owns
 
         remote = open_routed(url, timeout, kwargs)
         if remote is not None:

@@ -16,7 +16,7 @@ from typing import Any, AsyncIterator, Dict, List, Optional, Protocol, Set
 
 from .. import aio
 from ..errors import HubwireError
-from ..service.topics import board_key
+from ..bridge.topics import board_key
 
 __all__ = ["BoardLike", "FleetLike", "Board", "DeviceFleet", "board_id_of"]
 
@@ -24,7 +24,7 @@ log = logging.getLogger("hubwire.dashboard")
 
 
 class BoardLike(Protocol):
-    """One board of a fleet (read-only view of ``hubwire.service.fleet.Board``)."""
+    """One board of a fleet (read-only view of ``hubwire.daemon.fleet.Board``)."""
 
     @property
     def key(self) -> str: ...

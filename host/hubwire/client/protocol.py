@@ -130,7 +130,7 @@ def raise_error(msg: Dict[str, Any]) -> None:
     if kind == "LinkLost":
         raise LinkLost(text)
     if kind == "UnknownBoard":
-        from .fleet import UnknownBoard
+        from ..daemon.fleet import UnknownBoard
 
         raise UnknownBoard(text)
     raise ServiceError(kind, text)

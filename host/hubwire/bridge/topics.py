@@ -71,7 +71,7 @@ def board_key(name: str, board_id: Optional[str], n: int = 1) -> str:
 
 @dataclass
 class BridgeConfig:
-    """Settings of :func:`hubwire.service.mqtt.run_bridge` (all optional)."""
+    """Settings of :func:`hubwire.bridge.mqtt.run_bridge` (all optional)."""
 
     prefix: str = "hubwire"
     #: Home Assistant's discovery prefix; None turns discovery off

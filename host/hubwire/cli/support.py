@@ -8,9 +8,9 @@ import math
 import sys
 from typing import Any, Dict, TextIO
 
-from . import diagnose
-from .device import Device, connect
-from .errors import HubwireError, Timeout
+from .. import diagnose
+from ..device import Device, connect
+from ..errors import HubwireError, Timeout
 
 __all__ = ["CliError", "jsonable", "fmt_value", "print_json", "progress_printer", "open_device", "channel",
            "channel_json", "goal_or_argument"]

@@ -1,5 +1,5 @@
 """``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``); serve and list
-(:mod:`hubwire.service.main`); dashboard (:mod:`hubwire.dashboard`)."""
+(:mod:`hubwire.cli.serve`); dashboard (:mod:`hubwire.dashboard`)."""
 from __future__ import annotations
 
 import argparse
@@ -7,13 +7,13 @@ import os
 import sys
 from typing import Any, Optional, Sequence
 
-from . import __version__, diagnose
-from .cli_support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
+from .. import __version__, diagnose
+from .support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
                           print_json)
-from .cli_mission import run_mission
-from .cli_watch import cmd_watch, watch_duration
-from .device import channel_table, KNOWN_USB_VIDS
-from .errors import HubwireError, NakError
+from .mission import run_mission
+from .watch import cmd_watch, watch_duration
+from ..device import channel_table, KNOWN_USB_VIDS
+from ..errors import HubwireError, NakError
 
 __all__ = ["main", "build_parser", "watch_duration"]
 
@@ -168,10 +168,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wait for the board to appear and to come back when it goes away (default: end with "
                         "an error once it has been gone for --timeout seconds)")
     s.set_defaults(fn=cmd_watch)
-    from .service.main import add_commands
+    from .serve import add_commands
 
     add_commands(sub, out)
-    from .dashboard.cli import add_parser as add_dashboard  # imports NiceGUI only when run
+    from ..dashboard.cli import add_parser as add_dashboard  # imports NiceGUI only when run
 
     add_dashboard(sub, [common])
     return p

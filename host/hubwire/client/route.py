@@ -10,8 +10,8 @@ from typing import Any, Dict, Optional
 from ..aio import _Connecting
 from ..errors import HubwireError, NoDeviceFound
 from ..transport import SerialTransport
-from .client import AsyncRemoteDevice, Connection, connect
-from .fleet import UnknownBoard
+from .connection import AsyncRemoteDevice, Connection, connect
+from ..daemon.fleet import UnknownBoard
 from .protocol import ServiceNotRunning, socket_path
 
 __all__ = ["looks_like_port", "open_routed", "route_async", "RoutedConnecting"]
