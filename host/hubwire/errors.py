@@ -33,6 +33,16 @@ class ProtocolVersionError(HubwireError):
         self.hub_version = hub_version
 
 
+class UnknownBoard(HubwireError, KeyError):
+    """``hubwire serve`` has no board of that key, name, board id or port (the message lists the
+    known ones)."""
+
+    kind = "UnknownBoard"
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
 class NoDeviceFound(HubwireError):
     """No serial port (or more than one) matched a known microcontroller USB id."""
 

@@ -8,7 +8,7 @@ import json
 import os
 from typing import Any, Dict, Optional
 
-from ..errors import HubwireError, InvalidValue, LinkLost, NakError, Timeout
+from ..errors import HubwireError, InvalidValue, LinkLost, NakError, Timeout, UnknownBoard
 
 __all__ = ["PROTOCOL", "socket_path", "default_serve_socket", "board_json", "error_json", "raise_error",
            "ServiceNotRunning", "ServiceError", "encode", "SYSTEM_SOCKET", "Usage", "Busy"]
@@ -130,7 +130,5 @@ def raise_error(msg: Dict[str, Any]) -> None:
     if kind == "LinkLost":
         raise LinkLost(text)
     if kind == "UnknownBoard":
-        from ..daemon.fleet import UnknownBoard
-
         raise UnknownBoard(text)
     raise ServiceError(kind, text)

@@ -26,7 +26,7 @@ from typing import Any, Callable, Dict, List, Optional, Set
 
 from ..aio import AsyncDevice, connect
 from ..descriptor import Descriptor
-from ..errors import HubwireError, LinkLost
+from ..errors import LinkLost, UnknownBoard
 from ..transport import SerialTransport
 from . import durable
 from .ports import PortInfo, PortScanner
@@ -39,15 +39,6 @@ log = logging.getLogger("hubwire.service")
 #: seconds between two tries of a port that did not answer as a Hubwire board (doubling up to the max)
 RETRY_FIRST = 1.0
 RETRY_MAX = 30.0
-
-
-class UnknownBoard(HubwireError, KeyError):
-    """No board of that key, name, board id or port (the message lists the known ones)."""
-
-    kind = "UnknownBoard"
-
-    def __str__(self) -> str:
-        return str(self.args[0]) if self.args else ""
 
 
 @dataclass
