@@ -13,7 +13,7 @@ from .support import (CliError, channel, channel_json, fmt_value, goal_or_argume
 from .mission import run_mission
 from .watch import cmd_watch, watch_duration
 from ..device import channel_table, KNOWN_USB_VIDS
-from ..errors import HubwireError, NakError
+from ..errors import HubwireError, error_json
 
 __all__ = ["main", "build_parser", "watch_duration"]
 
@@ -104,7 +104,8 @@ def cmd_call(args: argparse.Namespace) -> int:
 _VALUE_HELP = ("the new value: a number (1.5, -2, 0x10), a bool (true/false, 1/0, on/off, yes/no), text as "
                "it is (quote it for the shell), JSON for arrays and structs ('[1, 2, 3]', '{\"x\": 1}')")
 _EPILOG = ("exit status: 0 done, 1 error, 2 usage error, 130 Ctrl-C, 141 output closed (| head).\n"
-           "With --json an error is one line on stdout: {\"error\": TYPE, \"message\": TEXT}, where TYPE is\n"
+           "With --json an error is one line on stdout: {\"error\": TYPE, \"message\": TEXT} (a Nak adds \"nak\",\n"
+           "\"code\" and \"channel\", an InvalidValue \"code\"), where TYPE is\n"
            + "".join(f"  {k:<21} {v}\n" for k, v in diagnose.ERROR_TYPES.items()))
 
 
@@ -215,10 +216,7 @@ def _stdout_closed() -> bool:
 def _error(args: argparse.Namespace, exc: BaseException) -> None:
     """Report ``exc`` once: as JSON on stdout with ``--json``, else as text on stderr."""
     if getattr(args, "json", False):
-        obj = {"error": diagnose.error_type(exc), "message": str(exc)}
-        if isinstance(exc, NakError):
-            obj["nak"] = exc.error
-        print_json(obj)
+        print_json(error_json(exc))
     else:
         sys.stderr.write(f"hubwire: {exc}\n")
 
