@@ -12,8 +12,9 @@ from .support import (CliError, channel, channel_json, fmt_value, goal_or_argume
                           print_json)
 from .mission import run_mission
 from .watch import cmd_watch, watch_duration
-from ..device import channel_table, KNOWN_USB_VIDS
+from ..device import channel_table
 from ..errors import HubwireError, error_json
+from ..ports import board_kind, serial_ports
 
 __all__ = ["main", "build_parser", "watch_duration"]
 
@@ -21,13 +22,10 @@ __all__ = ["main", "build_parser", "watch_duration"]
 # ------------------------------------------------------------------------------------- commands
 
 def cmd_ports(args: argparse.Namespace) -> int:
-    from serial.tools import list_ports
-
-    ports = sorted(list_ports.comports(), key=lambda p: p.device)
     rows = []
-    for p in ports:
+    for p in serial_ports():
         rows.append({"device": p.device, "vid": p.vid, "pid": p.pid, "description": p.description,
-                     "serial_number": p.serial_number, "board": KNOWN_USB_VIDS.get(p.vid) if p.vid else None})
+                     "serial_number": p.serial_number, "board": board_kind(p)})
     if args.json:
         print_json(rows)
         return 0
