@@ -5,6 +5,7 @@ Shared by the server and the client: where the socket is, how a board and an err
 from __future__ import annotations
 
 import json
+import math
 import os
 from typing import Any, Dict, Optional
 
@@ -12,7 +13,7 @@ from .. import errors
 from ..errors import HubwireError, ServiceError, ServiceNotRunning
 from .sockdir import log, untrusted
 
-__all__ = ["PROTOCOL", "socket_path", "default_serve_socket", "board_json", "error_json", "raise_error",
+__all__ = ["PROTOCOL", "jsonable", "socket_path", "default_serve_socket", "board_json", "error_json", "raise_error",
            "ServiceNotRunning", "ServiceError", "encode", "SYSTEM_SOCKET", "Usage", "Busy"]
 
 #: version of this protocol; a client refuses a service that speaks another
@@ -80,6 +81,18 @@ def encode(obj: Dict[str, Any]) -> bytes:
         return text.encode("utf-8")
     except UnicodeEncodeError:  # a lone surrogate (a "\\udc80" escape in a request): escaped again
         return (json.dumps(obj, separators=(",", ":")) + "\n").encode("ascii")
+
+
+def jsonable(v: Any) -> Any:
+    """A value as JSON on the socket (and in the command line's ``--json``): structs as objects, arrays
+    as lists, NaN and the infinities as text."""
+    if isinstance(v, tuple) and hasattr(v, "_asdict"):
+        return {k: jsonable(x) for k, x in v._asdict().items()}
+    if isinstance(v, (tuple, list)):
+        return [jsonable(x) for x in v]
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    return v
 
 
 def board_json(b: Any) -> Dict[str, Any]:

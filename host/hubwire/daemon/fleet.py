@@ -6,7 +6,7 @@ none. A board that comes back (replugged, on the same or another port) is the sa
 when name and id match; an id-less board is taken for the unplugged one of its name (a caveat when
 two id-less boards share a name: after a replug they may swap keys).
 
-Keys clients use (:func:`hubwire.bridge.topics.board_key`): the name, then ``--<board id>`` when the
+Keys clients use (:func:`hubwire.daemon.keys.board_key`): the name, then ``--<board id>`` when the
 board has one, each part escaped where it is not plain (``rover``, ``rover--A1B2``,
 ``a_b-xc14cddc0``); boards claiming the same name and id get ``---2``, ``---3``... The key depends on
 the board only, so restarts and replugs never move it. A name only one board has, ``name-<board id>``
@@ -30,7 +30,7 @@ from ..errors import LinkLost, UnknownBoard
 from ..transport import SerialTransport
 from . import durable
 from .ports import PortInfo, PortScanner
-from ..bridge.topics import board_key
+from .keys import board_key
 
 __all__ = ["Board", "Fleet", "Changes", "UnknownBoard"]
 

@@ -14,12 +14,11 @@ import stat
 from typing import Any, Awaitable, Callable, Dict, Optional
 
 from .. import __version__
-from ..cli.support import jsonable
 from ..errors import HubwireError, InvalidValue, LinkLost, StreamEnded
 from ..wire.messages import NakCode
 from . import durable_ops
 from .fleet import Fleet
-from ..client.protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json
+from ..client.protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json, jsonable
 from ..client.sockdir import ensure_dir
 
 __all__ = ["Server", "MAX_SUBSCRIPTIONS", "MAX_PENDING", "MAX_BACKLOG"]

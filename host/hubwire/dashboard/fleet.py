@@ -16,7 +16,7 @@ from typing import Any, AsyncIterator, Dict, List, Optional, Protocol, Set
 
 from .. import aio
 from ..errors import HubwireError
-from ..bridge.topics import board_key
+from ..daemon.keys import board_key
 
 __all__ = ["BoardLike", "FleetLike", "Board", "DeviceFleet", "board_id_of"]
 
