@@ -182,5 +182,6 @@ def test_the_checks_can_fail() -> None:
 @pytest.mark.parametrize("face", ["hubwire.device", "hubwire.aio"])
 def test_the_face_imports_no_service(face: str) -> None:
     # hubwire.service: where the daemon, the client and the bridge lived before they had folders
-    above = ("hubwire.service", "hubwire.client", "hubwire.daemon", "hubwire.bridge", "hubwire.dashboard", "hubwire.cli")
+    above = ("hubwire.service", "hubwire.client", "hubwire.daemon", "hubwire.bridge", "hubwire.dashboard",
+             "hubwire.cli")
     assert not {t for t in edges()[face] if t.startswith(above)}
