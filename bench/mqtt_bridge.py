@@ -47,7 +47,7 @@ def free_port() -> int:
 async def bridge_child(port: int, links: List[str], hz: float, cache: str) -> None:
     """The bridge process: a minimal fleet of connected boards and run_bridge."""
     import hubwire.aio
-    from hubwire.service.mqtt import run_bridge
+    from hubwire.bridge.mqtt import run_bridge
 
     class Board:
         def __init__(self, key: str, dev: Any, link: str) -> None:
@@ -80,7 +80,7 @@ async def measure(args: argparse.Namespace, port: int, bridge_pid: int, broker_p
     from paho.mqtt.properties import Properties
 
     import hubwire.aio
-    from hubwire.service.mqtt import NODELAY
+    from hubwire.bridge.mqtt import NODELAY
 
     lat: List[float] = []
     per_board: Dict[str, int] = {}
@@ -190,7 +190,7 @@ def report(args: argparse.Namespace, runs: List[Dict[str, Any]], mosquitto: str)
     ]
     details = f"""### Row 8: the MQTT bridge (docs/MQTT.md)
 
-{r['boards']} emulated Rovers, each connected by the bridge process (`hubwire.service.mqtt.run_bridge` on
+{r['boards']} emulated Rovers, each connected by the bridge process (`hubwire.bridge.mqtt.run_bridge` on
 one asyncio loop, the way `hubwire serve --mqtt` runs it) with its imu stream published at {r['hz']:g} Hz
 (`streams` setting) into a private {mosquitto} (`set_tcp_nodelay true`) on loopback. One MQTT 5
 subscriber (another process) takes every sample for {r['window_s']:g} s after 3 s of warm-up. Latency:

@@ -7,14 +7,14 @@ from __future__ import annotations
 
 from .errors import (DescriptorError, HubChannelError, HubwireError, InvalidValue, LinkLost, MissionCancelled,
                      MissionError, MissionFailed, MissionLost, NakError, NoDeviceFound, ProtocolVersionError,
-                     StreamEnded, Timeout)
+                     StreamEnded, Timeout, UnknownBoard)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "HubwireError", "Timeout", "NakError", "DescriptorError", "LinkLost", "ProtocolVersionError",
     "NoDeviceFound", "InvalidValue", "StreamEnded", "HubChannelError", "MissionError", "MissionFailed",
-    "MissionCancelled", "MissionLost", "__version__",
+    "MissionCancelled", "MissionLost", "UnknownBoard", "__version__",
 ]
 
 from .descriptor import Channel, Descriptor, parse_descriptor  # noqa: E402
@@ -24,6 +24,10 @@ from .job import Job  # noqa: E402
 from .session import LinkHealth, ReceivedEvent, Session, State, Stats, StreamSample  # noqa: E402
 from .transport import SerialTransport, Transport  # noqa: E402
 from . import aio  # noqa: E402
+from . import roads  # noqa: E402
+from .client import route as _route  # noqa: E402
+
+roads.install(_route)  # connect() reaches boards through hubwire serve where that applies
 
 __all__ += ["connect", "find_port", "Device", "Stream", "EventStream", "Session", "State", "ReceivedEvent",
             "StreamSample", "LinkHealth", "Stats", "Channel", "Descriptor", "parse_descriptor", "Transport",

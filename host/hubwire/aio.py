@@ -23,18 +23,19 @@ import asyncio
 from collections import deque
 from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple, TypeVar, cast
 
-from . import ops
+from . import ops, roads
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, NakError, Timeout
 from .hub_face import HubMethods
 from .job import AsyncJob, start_async_job
+from .ports import find_port
 from .session import AsyncSubscription, LinkHealth, ReceivedEvent, SessionCore, StreamSample
 from .session.events import EventSink
 from .session.hub_channels import HubSide
 from .session.runner import LoopDispatcher
 from .session.windows import read_async
 from .text import clip
-from .transport import Transport
+from .transport import SerialTransport, Transport
 from .wire import messages as m
 
 __all__ = ["connect", "AsyncDevice", "AsyncStream", "AsyncEventStream", "EventIterator", "AsyncJob"]
@@ -51,9 +52,11 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     this loop).
     """
     if transport is None:
-        from .service.route import RoutedConnecting  # through hubwire serve where it applies
-
-        return RoutedConnecting(url, baudrate, timeout, kwargs)
+        road = roads.service_road()
+        if road is not None:  # through hubwire serve where it applies
+            return cast(_Connecting, road.connecting(url, baudrate, timeout, kwargs))
+        transport = SerialTransport(url if url is not None else find_port(), baudrate,
+                                    **(kwargs.pop("serial_kwargs", None) or {}))
     return _Connecting(transport, timeout, kwargs)
 
 

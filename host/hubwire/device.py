@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, List, Optional, Tuple, cast
 
-from . import ops
+from . import ops, roads
 from .descriptor import Channel, Descriptor
 from .diagnose import ACCESS_WORDS
 from .errors import HubwireError, NakError, Timeout
@@ -41,10 +41,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
         with hubwire.connect("/dev/ttyACM0") as rover:
             rover.left = 0.5
     """
-    if transport is None:
-        from .service.route import open_routed  # a board name, or a port hubwire serve owns
-
-        remote = open_routed(url, timeout, kwargs)
+    road = roads.service_road()
+    if transport is None and road is not None:  # a board name, or a port hubwire serve owns
+        remote = road.open_routed(url, timeout, kwargs)
         if remote is not None:
             return Device(remote)
     if url is None and transport is None:

@@ -16,43 +16,15 @@ try:  # imported here, not when needed: a process that dropped its privileges ma
     import pwd
 except ImportError:  # pragma: no cover - Windows has no permission groups to explain
     grp = pwd = None  # type: ignore[assignment]
-from typing import Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple
+from typing import List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
-from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, MissionCancelled, MissionFailed,
-                     MissionLost, NakError, NoDeviceFound, ProtocolVersionError, Timeout)
+from .errors import ERROR_TYPES, HubwireError, error_type
 
 __all__ = [
     "ACCESS_WORDS", "ERROR_TYPES", "Holder", "PortOpenError", "access_error", "access_words", "busy_message",
     "describe_noise", "error_type", "failsafe_warning", "local_path", "no_answer_message", "open_error",
     "open_error_kind", "open_error_message", "permission_message", "port_holders",
 ]
-
-#: Every error type the command line reports (``{"error": TYPE, ...}`` with ``--json``), and why.
-ERROR_TYPES: Dict[str, str] = {
-    "UnknownChannel": "the device has no channel of that name",
-    "NotReadable": "the channel cannot be read",
-    "NotWritable": "the channel cannot be written",
-    "NotCallable": "the channel is not an action",
-    "InvalidValue": "the value does not parse, or does not fit the channel's type or range",
-    "Nak": "the device refused the request (its reason is in the \"nak\" field)",
-    "Timeout": "the device stopped answering a request",
-    "LinkLost": "the link to the device went down (board unplugged, reset or silent)",
-    "ConnectTimeout": "no Hubwire device answered on the port in time (silent, or another sketch)",
-    "NoDeviceFound": "'auto' found no board, or more than one",
-    "NoSuchPort": "the port does not exist",
-    "PermissionDenied": "no permission to open the port",
-    "PortBusy": "another program has the port open",
-    "PortError": "the port could not be opened for another reason",
-    "DescriptorError": "the device's descriptor is not valid",
-    "ProtocolVersionError": "the device speaks another Hubwire protocol version",
-    "UnknownBoard": "hubwire serve has no board of that name (the message lists the boards it has)",
-    "ServiceNotRunning": "a board was named but hubwire serve is not running (the message says how to start it)",
-    "MissionFailed": "the mission ended with a failure (its code is in the \"code\" field)",
-    "MissionCancelled": "the mission was cancelled on the board",
-    "MissionLost": "the board rebooted while the mission ran",
-    "Usage": "the command line is not valid (exit status 2)",
-    "Error": "any other error",
-}
 
 #: access letters in words, the command that uses each, and what lacking one is called
 ACCESS_WORDS = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream", "m": "mission"}
@@ -85,21 +57,6 @@ def local_path(url: Optional[str]) -> Optional[str]:
     if not url or "://" in url:
         return None
     return os.path.realpath(url)
-
-
-def error_type(exc: BaseException) -> str:
-    """The stable type (a key of :data:`ERROR_TYPES`) of an error; errors that carry their own
-    ``kind`` (:class:`PortOpenError`, the command line's) give it."""
-    kind = getattr(exc, "kind", None)
-    if kind in ERROR_TYPES:
-        return str(kind)
-    if isinstance(exc, NakError):
-        return "Nak"
-    for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
-                MissionFailed, MissionCancelled, MissionLost):
-        if isinstance(exc, cls):
-            return cls.__name__
-    return "Error"
 
 
 # ------------------------------------------------------------------------------------ channels

@@ -1,7 +1,7 @@
 """Exceptions raised by hubwire. Every one derives from :class:`HubwireError`."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Any, Dict, Optional
 
 
 class HubwireError(Exception):
@@ -31,6 +31,30 @@ class ProtocolVersionError(HubwireError):
         )
         self.device_version = device_version
         self.hub_version = hub_version
+
+
+class UnknownBoard(HubwireError, KeyError):
+    """``hubwire serve`` has no board of that key, name, board id or port (the message lists the
+    known ones)."""
+
+    kind = "UnknownBoard"
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class ServiceNotRunning(HubwireError):
+    """No ``hubwire serve`` answers on the socket."""
+
+    kind = "ServiceNotRunning"
+
+
+class ServiceError(HubwireError):
+    """An error ``hubwire serve`` reported that has no class of its own here (``kind`` is its type)."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(message)
+        self.kind = kind
 
 
 class NoDeviceFound(HubwireError):
@@ -105,3 +129,83 @@ class MissionCancelled(MissionError):
 
 class MissionLost(MissionError):
     """The run's outcome can never arrive: the board rebooted while it ran (or the session closed)."""
+
+
+# ------------------------------------------------------------------- errors as types and back
+
+#: Every error type the command line, the service's socket and the MQTT bridge report
+#: (``{"error": TYPE, "message": TEXT}``), and why.
+ERROR_TYPES: Dict[str, str] = {
+    "UnknownChannel": "the device has no channel of that name",
+    "NotReadable": "the channel cannot be read",
+    "NotWritable": "the channel cannot be written",
+    "NotCallable": "the channel is not an action",
+    "InvalidValue": "the value does not parse, or does not fit the channel's type or range",
+    "Nak": "the device refused the request (its reason is in the \"nak\" field)",
+    "Timeout": "the device stopped answering a request",
+    "LinkLost": "the link to the device went down (board unplugged, reset or silent)",
+    "ConnectTimeout": "no Hubwire device answered on the port in time (silent, or another sketch)",
+    "NoDeviceFound": "'auto' found no board, or more than one",
+    "NoSuchPort": "the port does not exist",
+    "PermissionDenied": "no permission to open the port",
+    "PortBusy": "another program has the port open",
+    "PortError": "the port could not be opened for another reason",
+    "DescriptorError": "the device's descriptor is not valid",
+    "ProtocolVersionError": "the device speaks another Hubwire protocol version",
+    "UnknownBoard": "hubwire serve has no board of that name (the message lists the boards it has)",
+    "ServiceNotRunning": "a board was named but hubwire serve is not running (the message says how to start it)",
+    "Busy": "a per-client limit of hubwire serve was reached",
+    "MissionFailed": "the mission ended with a failure (its code is in the \"code\" field)",
+    "MissionCancelled": "the mission was cancelled on the board",
+    "MissionLost": "the board rebooted while the mission ran",
+    "Usage": "the command line (or a request to the service) is not valid (exit status 2)",
+    "Error": "any other error",
+}
+
+
+def error_type(exc: BaseException) -> str:
+    """The stable type (a key of :data:`ERROR_TYPES`) of an error; errors that carry their own
+    ``kind`` (a port that cannot be opened, the command line's, the service's) give it."""
+    kind = getattr(exc, "kind", None)
+    if kind in ERROR_TYPES:
+        return str(kind)
+    if isinstance(exc, NakError):
+        return "Nak"
+    for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
+                MissionFailed, MissionCancelled, MissionLost):
+        if isinstance(exc, cls):
+            return cls.__name__
+    if isinstance(exc, KeyError):
+        return "UnknownChannel"  # a channel name a face does not know
+    return "Error"
+
+
+def error_json(exc: BaseException) -> Dict[str, Any]:
+    """An error as the command line (``--json``) and the service's socket report it: ``error`` (its
+    type), ``message``, and for a NAK ``nak``, ``code`` and ``channel``, for an invalid value ``code``."""
+    text = str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)
+    out: Dict[str, Any] = {"error": error_type(exc), "message": text}
+    if isinstance(exc, NakError):
+        out.update(nak=exc.error, code=exc.code, channel=exc.channel)
+    elif isinstance(exc, InvalidValue):
+        out.update(code=exc.code)
+    return out
+
+
+def error_from(msg: Dict[str, Any]) -> HubwireError:
+    """The exception an :func:`error_json` reply stands for (the class a direct connection raises;
+    :class:`ServiceError` naming the type for the others)."""
+    kind, text = str(msg.get("error", "Error")), str(msg.get("message", ""))
+    if kind == "Nak":
+        e: HubwireError = NakError(int(msg.get("code", 0)), msg.get("channel"))
+        e.args = (text,)
+        return e
+    if kind == "InvalidValue":
+        return InvalidValue(text, int(msg.get("code", 0)))
+    if kind == "Timeout":
+        return Timeout(text)
+    if kind == "LinkLost":
+        return LinkLost(text)
+    if kind == "UnknownBoard":
+        return UnknownBoard(text)
+    return ServiceError(kind, text)

@@ -35,7 +35,7 @@ import typing
 from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Union
 
 from .descriptor import Channel
-from .descriptor_parse import parse_descriptor
+from .descriptor.parse import parse_descriptor
 from .errors import DescriptorError, HubChannelError
 from .wire.messages import NakCode, fnv1a32
 

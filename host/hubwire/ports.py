@@ -1,11 +1,13 @@
-"""Finding the serial port of the one connected board."""
+"""Which serial ports are boards: the one filter on known USB vendor ids (used by ``connect()``
+without a port, ``hubwire ports``, ``hubwire dashboard`` and the service's scan), and finding the
+port of the one connected board."""
 from __future__ import annotations
 
-from typing import Any, Dict
+from typing import Any, Dict, List, Optional
 
 from .errors import NoDeviceFound
 
-__all__ = ["find_port", "KNOWN_USB_VIDS"]
+__all__ = ["find_port", "KNOWN_USB_VIDS", "serial_ports", "board_kind", "board_ports"]
 
 #: USB vendor ids of boards and USB-serial bridges commonly used with microcontrollers
 KNOWN_USB_VIDS: Dict[int, str] = {
@@ -20,6 +22,25 @@ KNOWN_USB_VIDS: Dict[int, str] = {
 }
 
 
+def serial_ports() -> List[Any]:
+    """Every serial port pyserial sees (``ListPortInfo``), in the order of their device names."""
+    from serial.tools import list_ports
+
+    return sorted(list_ports.comports(), key=lambda p: str(p.device))
+
+
+def board_kind(port: Any) -> Optional[str]:
+    """What kind of board a port's USB vendor id says it is (``"Arduino"``, ``"CH340"``...), or None
+    for a port that is not a known board."""
+    vid = getattr(port, "vid", None)
+    return KNOWN_USB_VIDS.get(vid) if vid is not None else None
+
+
+def board_ports(ports: Optional[List[Any]] = None) -> List[Any]:
+    """The ports (of ``ports``, else every serial port) whose USB vendor id is a known board's."""
+    return [p for p in (serial_ports() if ports is None else ports) if board_kind(p) is not None]
+
+
 def _port_line(p: Any) -> str:
     ids = f"{p.vid:04x}:{p.pid:04x}" if p.vid is not None else "no USB id"
     desc = p.description if p.description and p.description != "n/a" else ""
@@ -31,10 +52,8 @@ def find_port() -> str:
 
     Raises NoDeviceFound naming the ports seen when none or several match.
     """
-    from serial.tools import list_ports
-
-    ports = sorted(list_ports.comports(), key=lambda p: p.device)
-    matches = [p for p in ports if p.vid in KNOWN_USB_VIDS]
+    ports = serial_ports()
+    matches = board_ports(ports)
     if len(matches) == 1:
         return str(matches[0].device)
     seen = "; ".join(_port_line(p) for p in ports) or "none"
@@ -45,4 +64,4 @@ def find_port() -> str:
             "Pass the port explicitly, e.g. connect('/dev/ttyACM0').")
     raise NoDeviceFound(
         f"{len(matches)} boards found, pass the one to use explicitly: "
-        + "; ".join(f"{_port_line(p)} [{KNOWN_USB_VIDS[p.vid]}]" for p in matches))
+        + "; ".join(f"{_port_line(p)} [{board_kind(p)}]" for p in matches))

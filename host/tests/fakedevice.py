@@ -9,7 +9,7 @@ import time
 import tty
 from typing import Callable, List, Optional, Tuple, Union
 
-from hubwire.cache import descriptor_digest
+from hubwire.descriptor.cache import descriptor_digest
 from hubwire.wire import messages as m
 from hubwire.wire.frame import FrameDecoder, encode_frame
 

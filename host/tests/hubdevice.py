@@ -11,7 +11,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 import hubwire
 from hubwire import HubChannels
 
-from hubwire.cache import descriptor_digest
+from hubwire.descriptor.cache import descriptor_digest
 from hubwire.wire import messages as m
 from hubwire.testing.ptypeer import PtyPeer
 from hubwire.wire.frame import Frame

@@ -10,7 +10,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Tuple
 
-from hubwire.cache import descriptor_digest
+from hubwire.descriptor.cache import descriptor_digest
 from hubwire.descriptor import parse_descriptor
 from hubwire.errors import InvalidValue
 from hubwire.testing.ptypeer import PtyPeer

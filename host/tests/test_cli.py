@@ -11,7 +11,7 @@ from typing import Any, List
 
 from conftest import Emulator
 
-from hubwire.cli import build_parser, watch_duration
+from hubwire.cli.command import build_parser, watch_duration
 
 
 def run(*args: str, cache: str, timeout: float = 30) -> subprocess.CompletedProcess:

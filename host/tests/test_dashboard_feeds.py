@@ -104,7 +104,7 @@ def test_device_fleet_keys_boards_by_name_and_tells_their_state(emulator_path: s
             assert keys == ["rover", "rover---2"], keys  # same name, no id: numbered
             assert list(fleet.pending) == [str(tmp_path / "absent")]
             board = next(x for x in fleet.boards() if x.port == a.link)
-            assert fleet.get(board.key) is board and board.state == "ready"
+            assert fleet.get(board.key) == board and board.state == "ready"
             a.pause()  # silent: the link is declared lost
             await until(lambda: (a.link, "lost") in told, "the board told lost")
             a.resume()

@@ -175,7 +175,7 @@ def test_a_lossy_link_never_tears_or_repeats_a_large_value(tmp_path: pathlib.Pat
 
 
 def test_the_cli_parses_and_formats_lists() -> None:
-    from hubwire.cli_support import fmt_value, jsonable
+    from hubwire.cli.support import fmt_value, jsonable
     from hubwire.wire.values import codec_for
 
     c = codec_for({"t": "i16", "vc": 4})

@@ -20,7 +20,7 @@ from typing import Any, Dict, List
 import pytest
 
 import hubwire
-from hubwire.cache import descriptor_digest
+from hubwire.descriptor.cache import descriptor_digest
 from hubwire.wire import messages as m
 from hubwire.wire.frame import Frame, FrameDecoder, encode_frame
 from hubwire.wire.values import codec_for

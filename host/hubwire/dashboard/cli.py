@@ -9,6 +9,7 @@ import signal
 import sys
 from typing import Any, Dict, List, Tuple
 
+from ..ports import board_ports as known_boards
 from . import add_access_options, address_line
 from .auth import load_token
 from .server import DEFAULT_PORT, run_dashboard
@@ -38,11 +39,7 @@ def add_parser(sub: Any, parents: List[argparse.ArgumentParser]) -> None:
 
 def board_ports() -> List[str]:
     """Every serial port with a known board USB id."""
-    from serial.tools import list_ports
-
-    from ..ports import KNOWN_USB_VIDS
-
-    return sorted(str(p.device) for p in list_ports.comports() if p.vid in KNOWN_USB_VIDS)
+    return [str(p.device) for p in known_boards()]
 
 
 def parse_rates(items: List[str]) -> Tuple[float, Dict[str, float]]:

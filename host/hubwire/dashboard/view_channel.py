@@ -13,7 +13,7 @@ from nicegui import ui
 
 from ..descriptor import Channel
 from ..errors import HubwireError
-from ..service.topics import safe_id
+from ..daemon.keys import safe_id
 from .attrs import tag
 from .feed import READ_MAX_HZ, BoardFeed, outcome_text
 from .model import RATES, ChannelRecord, decimate, fmt_value, is_integer, plottable, to_csv, widget_for

@@ -13,7 +13,7 @@ import threading
 import time
 from typing import Any, Callable, List, Optional, Tuple
 
-from ..cache import DescriptorCache
+from ..descriptor.cache import DescriptorCache
 from ..descriptor import Descriptor
 from ..diagnose import PortOpenError, no_answer_message
 from ..errors import HubwireError, LinkLost, ProtocolVersionError, Timeout

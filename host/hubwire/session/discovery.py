@@ -7,7 +7,7 @@ import time
 from collections import deque
 from typing import Any, Deque, Dict, Optional
 
-from ..cache import DescriptorCache, descriptor_digest
+from ..descriptor.cache import DescriptorCache, descriptor_digest
 from ..descriptor import MAX_DESCRIPTOR_SIZE, Descriptor, parse_descriptor
 from ..errors import DescriptorError, HubwireError, LinkLost, NakError, Timeout
 from ..wire import messages as m

@@ -14,7 +14,7 @@ from typing import Any, List, Mapping
 
 from ..errors import InvalidValue
 from .scalars import BAD_LENGTH, BAD_VALUE, INTEGER_TYPES, SCALARS, describe_value, scalar_checker
-from .values import Codec
+from .codec import Codec
 
 __all__ = ["ListCodec"]
 

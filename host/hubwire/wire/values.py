@@ -27,67 +27,8 @@ __all__ = ["SCALARS", "Codec", "StructValue", "codec_for", "type_name", "make_st
 from .scalars import (BAD_LENGTH, BAD_VALUE, FLOAT_TYPES, INTEGER_TYPES, NUMERIC_TYPES, OUT_OF_RANGE,  # noqa: F401
                       SCALARS, describe_value, scalar_checker)
 from .structs import StructValue, make_struct_class  # noqa: F401
-
-
-def type_name(obj: Mapping[str, Any]) -> str:
-    """Human-readable name of a type object: ``f32``, ``u16[3]``, ``str[16]``, ``struct{ax: f32}``."""
-    t = obj.get("t")
-    if t == "struct":
-        return "struct{" + ", ".join(f"{f['n']}: {type_name(f)}" for f in obj.get("f", ())) + "}"
-    if "c" in obj:
-        return f"{t}[{obj['c']}]"
-    if "vc" in obj:
-        return f"{t}[<={obj['vc']}]"
-    return str(t)
-
-
-class Codec:
-    """Encoder/decoder for one type; build with :func:`codec_for`.
-
-    Attributes: ``name`` (readable type name), ``kind`` (``scalar``, ``array``, ``list``, ``struct``,
-    ``str``, ``void``), ``scalar`` (element type name, or None), ``size`` (payload size, None for strings:
-    their size varies), ``type_obj`` (the descriptor type object).
-    """
-
-    kind = ""
-
-    def __init__(self, type_obj: Mapping[str, Any]) -> None:
-        self.type_obj = dict(type_obj)
-        self.name = type_name(type_obj)
-        self.scalar: Optional[str] = None
-        self.size: Optional[int] = 0
-        self.max_size = 0
-
-    # subclasses override
-    def encode(self, value: Any) -> bytes:
-        """Encode ``value`` to payload bytes; raise InvalidValue if it does not fit the type."""
-        raise NotImplementedError
-
-    def decode(self, payload: bytes) -> Any:
-        """Decode payload bytes; raise InvalidValue(BAD_LENGTH / BAD_VALUE) if malformed."""
-        raise NotImplementedError
-
-    def check(self, value: Any) -> Any:
-        """Normalise ``value`` (lists become tuples, dicts become structs) or raise InvalidValue."""
-        return self.decode(self.encode(value)) if self.kind != "scalar" else self._check(value)  # type: ignore[attr-defined]
-
-    def from_json(self, obj: Any) -> Any:
-        """Python value from its JSON form (lists for arrays, objects for structs)."""
-        return obj
-
-    def to_json(self, value: Any) -> Any:
-        """JSON form of a decoded value."""
-        return value
-
-    def parse_text(self, text: str) -> Any:
-        """Parse a command-line argument into a value of this type."""
-        try:
-            return self.from_json(json.loads(text))
-        except ValueError:
-            raise InvalidValue(f"cannot parse {text!r} as {self.name} (give JSON)", BAD_VALUE) from None
-
-    def __repr__(self) -> str:
-        return f"<Codec {self.name}>"
+from .codec import Codec, type_name
+from .lists import ListCodec
 
 
 def _bad_length(name: str, want: Any, got: int) -> InvalidValue:
@@ -353,7 +294,6 @@ def codec_for(type_obj: Mapping[str, Any], where: str = "value", class_name: str
         return StructCodec(type_obj, where, class_name)
     if t in SCALARS:
         if "vc" in type_obj:
-            from .lists import ListCodec  # it builds on Codec, defined above
             return ListCodec(type_obj, where)
         if "c" in type_obj:
             return ArrayCodec(type_obj, where)

@@ -1,5 +1,5 @@
 """Fixtures for the MQTT bridge: a private mosquitto on a free loopback port, emulated boards, and a
-stand-in for the service's fleet (``hubwire.service.fleet`` has the real one)."""
+stand-in for the service's fleet (``hubwire.daemon.fleet`` has the real one)."""
 from __future__ import annotations
 
 import getpass

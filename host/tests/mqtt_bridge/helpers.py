@@ -1,4 +1,4 @@
-"""A stand-in for the service's fleet (the shape of hubwire.service.fleet, built from
+"""A stand-in for the service's fleet (the shape of hubwire.daemon.fleet, built from
 hubwire.aio.connect() on emulated boards), an MQTT test client, and a running bridge."""
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 import hubwire.aio
-from hubwire.service.mqtt import NODELAY, Bridge
-from hubwire.service.topics import BridgeConfig
+from hubwire.bridge.mqtt import NODELAY, Bridge
+from hubwire.bridge.topics import BridgeConfig
 
 
 @dataclass

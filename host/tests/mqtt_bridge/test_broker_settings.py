@@ -7,8 +7,8 @@ from typing import Any, List
 
 import pytest
 
-from hubwire.service.broker import PASSWORD_ENV, load_config, settings_from_args
-from hubwire.service.main import add_commands
+from hubwire.bridge.broker import PASSWORD_ENV, load_config, settings_from_args
+from hubwire.cli.serve import add_commands
 
 
 def _args(argv: List[str]) -> argparse.Namespace:

@@ -7,9 +7,9 @@ import json
 from typing import Dict, List, Optional, Tuple
 
 from hubwire.descriptor import parse_descriptor
-from hubwire.service import ha
-from hubwire.service.fleet import Fleet
-from hubwire.service.topics import Topics
+from hubwire.bridge import ha
+from hubwire.daemon.fleet import Fleet
+from hubwire.bridge.topics import Topics
 
 from . import ha_documented as doc
 

@@ -7,8 +7,8 @@ import json
 from typing import Any, Dict, Tuple
 
 from hubwire.descriptor import parse_descriptor
-from hubwire.service import ha
-from hubwire.service.topics import Topics
+from hubwire.bridge import ha
+from hubwire.bridge.topics import Topics
 
 from . import ha_documented as doc
 from .conftest import Broker

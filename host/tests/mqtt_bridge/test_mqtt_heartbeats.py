@@ -11,10 +11,10 @@ from typing import Any
 
 import aiomqtt
 
-from hubwire.service import mqtt as bridge_mod
-from hubwire.service.inbound import Inbound
-from hubwire.service.mqtt import Bridge
-from hubwire.service.topics import BridgeConfig
+from hubwire.bridge import mqtt as bridge_mod
+from hubwire.bridge.inbound import Inbound
+from hubwire.bridge.mqtt import Bridge
+from hubwire.bridge.topics import BridgeConfig
 
 from .conftest import Broker
 from .helpers import StandInFleet, running_bridge

@@ -223,7 +223,7 @@ CHILD = """
 import asyncio, sys
 sys.path.insert(0, sys.argv[3])
 from mqtt_bridge.helpers import StandInFleet
-from hubwire.service.mqtt import run_bridge
+from hubwire.bridge.mqtt import run_bridge
 
 async def main():
     fleet = StandInFleet(sys.argv[4])

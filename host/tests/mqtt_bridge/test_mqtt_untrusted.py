@@ -10,7 +10,7 @@ from typing import Any, List
 
 import pytest
 
-from hubwire.service import mqtt as bridge_mod
+from hubwire.bridge import mqtt as bridge_mod
 
 from .conftest import Broker
 from .helpers import StandInFleet, running_bridge, watcher

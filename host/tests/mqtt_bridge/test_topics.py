@@ -5,8 +5,8 @@ import asyncio
 
 import pytest
 
-from hubwire.service.outbox import Outbox
-from hubwire.service.topics import BadPayload, BridgeConfig, Topics, parse_value, safe_id
+from hubwire.bridge.outbox import Outbox
+from hubwire.bridge.topics import BadPayload, BridgeConfig, Topics, parse_value, safe_id
 
 
 def test_command_topics_parse_and_others_do_not() -> None:

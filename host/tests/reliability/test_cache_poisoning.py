@@ -9,7 +9,7 @@ import os
 import pytest
 
 import hubwire
-from hubwire.cache import descriptor_digest
+from hubwire.descriptor.cache import descriptor_digest
 from hubwire.wire.messages import fnv1a32
 
 from fakedevice import FakeDevice

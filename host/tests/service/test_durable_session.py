@@ -1,4 +1,4 @@
-"""A board's session tied to the service's store (hubwire.service.durable), in one process: the
+"""A board's session tied to the service's store (hubwire.daemon.durable), in one process: the
 device's retry of an event the service stored but never acknowledged is not stored twice, and hub
 events kept by one session are sent by the next."""
 from __future__ import annotations
@@ -11,8 +11,8 @@ import pytest
 
 from conftest import Emulator
 from hubwire.aio import connect
-from hubwire.service import durable
-from hubwire.service.store import Store
+from hubwire.daemon import durable
+from hubwire.daemon.store import Store
 from hubwire.testing import repo_root
 from hubwire.transport import SerialTransport
 from hubwire.wire import messages as m
@@ -111,7 +111,7 @@ def test_events_waiting_on_the_board_when_the_service_starts_are_stored(soak: Em
     """Events the board kept for the hub while no service ran arrive while the service adopts it
     (asks its board id, slowly here): each one is stored, none taken by the service's own counting."""
     from hubwire.aio import AsyncDevice
-    from hubwire.service.fleet import Fleet
+    from hubwire.daemon.fleet import Fleet
 
     board_id = AsyncDevice.board_id
 

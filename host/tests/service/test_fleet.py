@@ -8,7 +8,7 @@ import asyncio
 from typing import Any, Callable, Dict, List, Optional
 
 from conftest import Emulator
-from hubwire.service.fleet import Board, Changes, Fleet, UnknownBoard
+from hubwire.daemon.fleet import Board, Changes, Fleet, UnknownBoard
 
 
 class UsbPort:

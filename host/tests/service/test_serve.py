@@ -189,10 +189,10 @@ def test_protocol_errors_are_answered(serve: Serve, emulators: Callable[[str], E
 
 
 def test_mqtt_hook_hands_the_fleet_to_the_bridge(tmp_path: Any) -> None:
-    """`serve --mqtt HOST:PORT` calls hubwire.service.mqtt.run_bridge(fleet, host=, port=) on the
+    """`serve --mqtt HOST:PORT` calls hubwire.bridge.mqtt.run_bridge(fleet, host=, port=) on the
     service's loop and cancels what it returned when the service stops."""
-    from hubwire.service.fleet import Fleet
-    from hubwire.service.main import serve as run_serve
+    from hubwire.daemon.fleet import Fleet
+    from hubwire.cli.serve import serve as run_serve
 
     calls: list = []
 

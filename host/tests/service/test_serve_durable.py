@@ -217,7 +217,7 @@ def test_hub_events_after_kill9_and_a_board_reboot(serve: Serve, soak: Emulator)
 def test_notify_when_full_is_refused_and_the_kept_ones_all_arrive(serve: Serve, soak: Emulator) -> None:
     """A board that answers nothing (stopped): the service keeps HUB_EVENT_LIMIT hub events for it and
     refuses the next one; killed and restarted meanwhile, it delivers every one it accepted."""
-    from hubwire.service.store import HUB_EVENT_LIMIT
+    from hubwire.daemon.store import HUB_EVENT_LIMIT
 
     c = ready_client(serve, "soak")
     c.request("notify", board="soak", channel="tick", value=1)  # the board is bound: hub events flow

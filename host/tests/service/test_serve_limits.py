@@ -8,11 +8,11 @@ import json
 from typing import Any, Callable, Dict, List, Tuple
 
 from conftest import Emulator
-from hubwire.service import server as srv
+from hubwire.daemon import server as srv
 
 from .conftest import Serve
 
-#: the caps of hubwire.service.server (values in force when they did not exist yet, for the old code)
+#: the caps of hubwire.daemon.server (values in force when they did not exist yet, for the old code)
 MAX_SUBSCRIPTIONS = getattr(srv, "MAX_SUBSCRIPTIONS", 256)
 MAX_PENDING = getattr(srv, "MAX_PENDING", 64)
 

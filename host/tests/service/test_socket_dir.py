@@ -11,9 +11,9 @@ from typing import Any
 import pytest
 
 from hubwire.errors import HubwireError
-from hubwire.service import protocol
-from hubwire.service.fleet import Fleet
-from hubwire.service.server import Server
+from hubwire.client import protocol
+from hubwire.daemon.fleet import Fleet
+from hubwire.daemon.server import Server
 
 NOBODY = 65534  # another local user (tests run as root and hand the directory over)
 

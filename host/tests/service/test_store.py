@@ -1,4 +1,4 @@
-"""The service's state file (hubwire.service.store): what it keeps, its bounds, what happens when full."""
+"""The service's state file (hubwire.daemon.store): what it keeps, its bounds, what happens when full."""
 from __future__ import annotations
 
 import os
@@ -9,7 +9,7 @@ import pytest
 
 from hubwire.errors import HubwireError
 
-from hubwire.service.store import Store, StoredEvent, StoreFull, state_dir
+from hubwire.daemon.store import Store, StoredEvent, StoreFull, state_dir
 
 
 class Clock:

@@ -5,10 +5,10 @@ import configparser
 import os
 import shlex
 
-from hubwire.service.protocol import SYSTEM_SOCKET
-from hubwire.service.store import SYSTEM_STATE_DIR
+from hubwire.client.protocol import SYSTEM_SOCKET
+from hubwire.daemon.store import SYSTEM_STATE_DIR
 
-UNIT = os.path.join(os.path.dirname(__file__), "..", "..", "hubwire", "service", "hubwire.service")
+UNIT = os.path.join(os.path.dirname(__file__), "..", "..", "hubwire", "daemon", "hubwire.service")
 
 
 def _unit() -> configparser.ConfigParser:

@@ -16,8 +16,8 @@ from collections import deque
 from dataclasses import asdict, dataclass, replace
 from typing import Any, Deque, Dict, List, Optional, Tuple
 
-__all__ = ["Faults", "DirectionStats", "Direction", "directions", "select_directions", "link_stats", "MAX_QUEUED",
-           "PARTIAL_FLUSH"]
+__all__ = ["Faults", "SOAK_FAULTS", "DirectionStats", "Direction", "directions", "select_directions", "link_stats",
+           "MAX_QUEUED", "PARTIAL_FLUSH"]
 
 #: bytes held per direction before new ones are dropped (a reader that stopped reading)
 MAX_QUEUED = 64 * 1024
@@ -52,6 +52,11 @@ class Faults:
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0")
         return self
+
+
+#: the soak's link (soak.py, soak_hub.py): BER 1e-4, 1% byte drops, 0.5% duplicated frames, a garbage
+#: burst (8..64 random bytes) every 1 s
+SOAK_FAULTS = Faults(ber=1e-4, drop=0.01, dup=0.005, garbage_every=1.0, garbage_len=(8, 64))
 
 
 @dataclass

@@ -45,6 +45,7 @@ from typing import Any, Callable, Dict, List, Optional
 
 from .. import repo_root
 from . import FaultLink, Faults, stop_process
+from .faults import SOAK_FAULTS
 from .soak_hub import HubTraffic, check_hub_boots
 from .soak_large import BlobLoad, check_blob_boot
 from .soak_missions import MissionTraffic, check_missions
@@ -52,8 +53,6 @@ from .soak_load import Load, check_segment, first_after, retry, value_for, wait_
 
 __all__ = ["SOAK_FAULTS", "run_soak", "check", "value_for", "soak_emulator_binary"]
 
-#: the issue's link: BER 1e-4, 1% byte drops, 0.5% duplicated frames, a garbage burst (8..64 random bytes) every 1 s
-SOAK_FAULTS = Faults(ber=1e-4, drop=0.01, dup=0.005, garbage_every=1.0, garbage_len=(8, 64))
 #: the dead link lasts this many of the device's loss timeouts (4 heartbeats of 250 ms)
 DEAD_TIMEOUTS = 5
 LOSS_TIMEOUT_S = 1.0

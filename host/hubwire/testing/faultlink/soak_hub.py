@@ -1,5 +1,5 @@
 """Soak of the hub's channels through the faulty link: the device writes, calls and reads the hub,
-and the hub sends it events, all under the soak's faults (:data:`soak.SOAK_FAULTS`).
+and the hub sends it events, all under the soak's faults (:data:`faults.SOAK_FAULTS`).
 
     python -m hubwire.testing.faultlink.soak_hub --seconds 30
 
@@ -30,6 +30,8 @@ from ...wire import messages as m
 from ...wire.frame import Frame
 from ..ptypeer import PtyPeer
 from . import FaultLink, Faults
+from .faults import SOAK_FAULTS
+from .soak_load import retry, wait_for
 
 __all__ = ["HubPeer", "run_hub_soak", "check_hub_soak", "PEER_DESCRIPTOR"]
 
@@ -145,8 +147,6 @@ def run_hub_soak(seconds: float = 30.0, seed: int = 1, workdir: Optional[str] = 
                  faults: Optional[Faults] = None) -> Dict[str, Any]:
     """One run (see the module docstring); returns the counts :func:`check_hub_soak` judges."""
     import hubwire
-
-    from .soak import SOAK_FAULTS
 
     workdir = workdir or tempfile.mkdtemp(prefix="soak-hub-")
     peer = HubPeer()
@@ -270,7 +270,6 @@ class HubTraffic:
 
     def start(self, dev: Any) -> None:
         """Let the sketch drive the hub's channels (a write, retried until it is acknowledged)."""
-        from .soak_load import retry
 
         retry(lambda: setattr(dev, "hub_load", True), "write hub_load")
 
@@ -288,7 +287,6 @@ class HubTraffic:
     def close_boot(self, dev: Any) -> Dict[str, Any]:
         """On a clean link: stop the sketch's requests, wait until none is left and every event is
         in, read the sketch's counters, and settle this boot's counts."""
-        from .soak_load import retry, wait_for
 
         retry(lambda: setattr(dev, "hub_load", False), "write hub_load")
         wait_for(lambda: retry(lambda: dev.hub_queued_now, "read hub_queued_now") == 0, 15)

@@ -8,13 +8,12 @@ import os
 from typing import Any, Dict, Optional
 
 from ..aio import _Connecting
-from ..errors import HubwireError, NoDeviceFound
+from ..errors import HubwireError, NoDeviceFound, UnknownBoard
 from ..transport import SerialTransport
-from .client import AsyncRemoteDevice, Connection, connect
-from .fleet import UnknownBoard
+from .connection import AsyncRemoteDevice, Connection, connect
 from .protocol import ServiceNotRunning, socket_path
 
-__all__ = ["looks_like_port", "open_routed", "route_async", "RoutedConnecting"]
+__all__ = ["looks_like_port", "open_routed", "route_async", "RoutedConnecting", "connecting"]
 
 _CALLBACKS = ("on_link_lost", "on_link_restored", "on_reconnect")
 
@@ -115,3 +114,9 @@ class RoutedConnecting(_Connecting):
         self._transport = SerialTransport(self._url if self._url is not None else find_port(), self._baudrate,
                                           **self._serial_kwargs)
         return await super()._open()
+
+
+def connecting(url: Optional[str], baudrate: int, timeout: float, kwargs: Dict[str, Any]) -> RoutedConnecting:
+    """``hubwire.aio.connect(url)`` without a transport (this module is the package's service road,
+    :mod:`hubwire.roads`)."""
+    return RoutedConnecting(url, baudrate, timeout, kwargs)

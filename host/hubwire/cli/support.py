@@ -4,26 +4,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from typing import Any, Dict, TextIO
 
-from . import diagnose
-from .device import Device, connect
-from .errors import HubwireError, Timeout
+from .. import diagnose
+from ..client.protocol import jsonable
+from ..device import Device, connect
+from ..errors import HubwireError, Timeout
 
 __all__ = ["CliError", "jsonable", "fmt_value", "print_json", "progress_printer", "open_device", "channel",
            "channel_json", "goal_or_argument"]
-
-
-def jsonable(v: Any) -> Any:
-    if isinstance(v, tuple) and hasattr(v, "_asdict"):
-        return {k: jsonable(x) for k, x in v._asdict().items()}
-    if isinstance(v, (tuple, list)):
-        return [jsonable(x) for x in v]
-    if isinstance(v, float) and not math.isfinite(v):
-        return str(v)
-    return v
 
 
 def fmt_value(v: Any) -> str:

@@ -6,7 +6,7 @@ none. A board that comes back (replugged, on the same or another port) is the sa
 when name and id match; an id-less board is taken for the unplugged one of its name (a caveat when
 two id-less boards share a name: after a replug they may swap keys).
 
-Keys clients use (:func:`hubwire.service.topics.board_key`): the name, then ``--<board id>`` when the
+Keys clients use (:func:`hubwire.daemon.keys.board_key`): the name, then ``--<board id>`` when the
 board has one, each part escaped where it is not plain (``rover``, ``rover--A1B2``,
 ``a_b-xc14cddc0``); boards claiming the same name and id get ``---2``, ``---3``... The key depends on
 the board only, so restarts and replugs never move it. A name only one board has, ``name-<board id>``
@@ -26,11 +26,11 @@ from typing import Any, Callable, Dict, List, Optional, Set
 
 from ..aio import AsyncDevice, connect
 from ..descriptor import Descriptor
-from ..errors import HubwireError, LinkLost
+from ..errors import LinkLost, UnknownBoard
 from ..transport import SerialTransport
 from . import durable
 from .ports import PortInfo, PortScanner
-from .topics import board_key
+from .keys import board_key
 
 __all__ = ["Board", "Fleet", "Changes", "UnknownBoard"]
 
@@ -39,15 +39,6 @@ log = logging.getLogger("hubwire.service")
 #: seconds between two tries of a port that did not answer as a Hubwire board (doubling up to the max)
 RETRY_FIRST = 1.0
 RETRY_MAX = 30.0
-
-
-class UnknownBoard(HubwireError, KeyError):
-    """No board of that key, name, board id or port (the message lists the known ones)."""
-
-    kind = "UnknownBoard"
-
-    def __str__(self) -> str:
-        return str(self.args[0]) if self.args else ""
 
 
 @dataclass
@@ -97,6 +88,8 @@ class _Attempt:
     failures: int = 0
     next_at: float = 0.0
     task: Optional["asyncio.Task[None]"] = None
+    #: why the last try failed
+    error: str = ""
 
 
 class Fleet:
@@ -106,9 +99,10 @@ class Fleet:
     def __init__(self, *, ports: Optional[List[str]] = None, globs: Optional[List[str]] = None,
                  usb: bool = True, connect_timeout: float = 5.0, cache_dir: Any = None,
                  poll_interval: float = 0.5, lister: Optional[Callable[[], List[Any]]] = None,
-                 udev: bool = True, store: Any = None) -> None:
+                 udev: bool = True, store: Any = None, baudrate: int = 115200) -> None:
         self.scanner = PortScanner(ports or [], globs or [], usb=usb, lister=lister)
         self.connect_timeout = connect_timeout
+        self.baudrate = baudrate
         self.cache_dir = cache_dir
         self.poll_interval = poll_interval
         self.use_udev = udev
@@ -145,6 +139,18 @@ class Fleet:
         """Yields a board snapshot each time one is added, changes state, or changes device/port:
         every change from this call on (``async for``; ``aclose()`` or leaving the loop ends it)."""
         return Changes(self._watchers)
+
+    @property
+    def pending(self) -> Dict[str, str]:
+        """The ports named to the fleet that serve no board now, each with why."""
+        out: Dict[str, str] = {}
+        for url in self.scanner.ports:
+            real = self._real(url)
+            if real in self._by_port:
+                continue
+            a = self._attempts.get(real)
+            out[url] = a.error if a is not None and a.error else "absent" if real not in self._info else "connecting"
+        return out
 
     # ------------------------------------------------------------------------------- additions
 
@@ -219,6 +225,13 @@ class Fleet:
         self._scan()
         self._task = asyncio.get_running_loop().create_task(self._run())
 
+    async def __aenter__(self) -> "Fleet":
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc: Any) -> None:
+        await self.close()
+
     async def close(self) -> None:
         """Stop scanning and close every board's session."""
         self._closed = True
@@ -282,13 +295,14 @@ class Fleet:
             if self._resumable is None:
                 self._resumable = set(self.store.hub_session_ports()) if self.store is not None else set()
             hs = durable.hub_session(self.store, info.path, info.path in self._resumable)
-            dev = await connect(transport=SerialTransport(info.path), timeout=self.connect_timeout,
+            dev = await connect(transport=SerialTransport(info.path, self.baudrate), timeout=self.connect_timeout,
                                 cache_dir=self.cache_dir, hub_session=hs)
             self._resumable.discard(info.path)
         except asyncio.CancelledError:
             raise
         except Exception as e:  # noqa: BLE001 - any port that is no Hubwire board
             a.failures += 1
+            a.error = str(e)
             delay = min(RETRY_FIRST * 2 ** (a.failures - 1), RETRY_MAX)
             a.next_at, a.task = time.monotonic() + delay, None
             log.warning("hubwire serve: %s: %s (trying again in %g s)", info.path, e, delay)

@@ -10,7 +10,7 @@ import logging
 import os
 from typing import Any, Callable, Dict, List, NamedTuple, Optional
 
-from ..ports import KNOWN_USB_VIDS
+from ..ports import board_ports, serial_ports
 
 __all__ = ["PortInfo", "PortScanner", "is_path"]
 
@@ -42,15 +42,13 @@ class PortScanner:
     def _usb_ports(self) -> List[Any]:
         if self._lister is not None:
             return self._lister()
-        from serial.tools import list_ports
-
-        return list(list_ports.comports())
+        return serial_ports()
 
     def scan(self) -> Dict[str, PortInfo]:
         seen: Dict[str, PortInfo] = {}
         if self.usb:
-            for p in self._usb_ports():
-                if p.vid in KNOWN_USB_VIDS and os.path.exists(p.device):
+            for p in board_ports(self._usb_ports()):
+                if os.path.exists(p.device):
                     seen[os.path.realpath(p.device)] = PortInfo(p.device, p.serial_number or None)
         for url in self.ports:
             if not is_path(url):

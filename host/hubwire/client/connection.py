@@ -15,7 +15,7 @@ from typing import Any, Callable, Dict, List, Optional
 
 from .. import ops
 from ..descriptor import Channel, Descriptor
-from ..descriptor_parse import parse_descriptor
+from ..descriptor.parse import parse_descriptor
 from ..errors import HubwireError, LinkLost
 from ..session import LinkHealth, ReceivedEvent, StreamSample
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path

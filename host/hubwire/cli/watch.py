@@ -6,10 +6,10 @@ import sys
 import time
 from typing import Any, Dict, List, Optional, Sequence
 
-from . import diagnose
-from .cli_support import CliError, fmt_value, jsonable, open_device, print_json
-from .device import Device
-from .errors import HubwireError, LinkLost
+from .. import diagnose
+from .support import CliError, fmt_value, jsonable, open_device, print_json
+from ..device import Device
+from ..errors import HubwireError, LinkLost
 
 __all__ = ["cmd_watch", "watch_duration"]
 

@@ -6,14 +6,14 @@ import json
 import math
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
-from .descriptor import (ACCESS_LETTERS, CHANNEL_KEYS, FIELD_KEYS, MAX_DEPTH, MAX_DESCRIPTOR_SIZE, MAX_LIST, MAX_VALUE,
+from .model import (ACCESS_LETTERS, CHANNEL_KEYS, FIELD_KEYS, MAX_DEPTH, MAX_DESCRIPTOR_SIZE, MAX_LIST, MAX_VALUE,
                          NAME_MAX, NAME_RE, TOP_KEYS, Channel, Descriptor)
-from .errors import DescriptorError, InvalidValue
-from .text import clip, clip_json, clip_list
-from .wire.frame import PROTOCOL_MAX_PAYLOAD
-from .wire.messages import PROTOCOL_VERSION, fnv1a32
-from .wire.scalars import INTEGER_TYPES, NUMERIC_TYPES
-from .wire.values import SCALARS, Codec, codec_for
+from ..errors import DescriptorError, InvalidValue
+from ..text import clip, clip_json, clip_list
+from ..wire.frame import PROTOCOL_MAX_PAYLOAD
+from ..wire.messages import PROTOCOL_VERSION, fnv1a32
+from ..wire.scalars import INTEGER_TYPES, NUMERIC_TYPES
+from ..wire.values import SCALARS, Codec, codec_for
 
 __all__ = ["parse_descriptor"]
 

@@ -7,10 +7,10 @@ import argparse
 import sys
 from typing import Any, Optional
 
-from .cli_support import fmt_value, goal_or_argument, jsonable, print_json
-from .device import Device
-from .errors import MissionCancelled, MissionError, Timeout
-from .job import Job
+from .support import fmt_value, goal_or_argument, jsonable, print_json
+from ..device import Device
+from ..errors import MissionCancelled, MissionError, Timeout
+from ..job import Job
 
 __all__ = ["run_mission"]
 

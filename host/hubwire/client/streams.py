@@ -12,7 +12,7 @@ from ..errors import LinkLost, StreamEnded, Timeout
 from ..session import ReceivedEvent, StreamSample
 
 if TYPE_CHECKING:
-    from .client import AsyncRemoteDevice
+    from .connection import AsyncRemoteDevice
 
 __all__ = ["RemoteStream", "RemoteEvents", "ended"]
 

@@ -11,10 +11,10 @@ import re
 from dataclasses import dataclass, field
 from typing import Any, Dict, Optional, Tuple
 
-from .errors import InvalidValue
-from .wire.values import Codec
+from ..errors import InvalidValue
+from ..wire.values import Codec
 
-__all__ = ["MAX_DESCRIPTOR_SIZE", "MAX_DEPTH", "MAX_VALUE", "Channel", "Descriptor", "parse_descriptor"]
+__all__ = ["MAX_DESCRIPTOR_SIZE", "MAX_DEPTH", "MAX_VALUE", "Channel", "Descriptor"]
 
 #: largest descriptor the hub accepts, bytes
 MAX_DESCRIPTOR_SIZE = 16 * 1024
@@ -106,7 +106,7 @@ class Channel:
         """
         v = self.codec.check(value)
         if self.min is not None or self.max is not None:
-            from .wire.messages import NakCode
+            from ..wire.messages import NakCode
 
             items = v if isinstance(v, (tuple, list)) else (v,)
             for x in items:
@@ -160,5 +160,3 @@ class Descriptor:
     def __len__(self) -> int:
         return len(self.channels)
 
-
-from .descriptor_parse import parse_descriptor  # noqa: E402  (it builds the classes above)

@@ -14,13 +14,12 @@ import stat
 from typing import Any, Awaitable, Callable, Dict, Optional
 
 from .. import __version__
-from ..cli_support import jsonable
 from ..errors import HubwireError, InvalidValue, LinkLost, StreamEnded
 from ..wire.messages import NakCode
 from . import durable_ops
 from .fleet import Fleet
-from .protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json
-from .sockdir import ensure_dir
+from ..client.protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json, jsonable
+from ..client.sockdir import ensure_dir
 
 __all__ = ["Server", "MAX_SUBSCRIPTIONS", "MAX_PENDING", "MAX_BACKLOG"]
 
@@ -41,7 +40,7 @@ OVERFLOW_GRACE_S = 10.0
 
 class Server:
     """Listens on ``path`` (a Unix socket, mode 0660, in a directory only this user may write to:
-    :mod:`hubwire.service.sockdir`) and serves ``fleet`` to every client."""
+    :mod:`hubwire.client.sockdir`) and serves ``fleet`` to every client."""
 
     def __init__(self, fleet: Fleet, path: str) -> None:
         self.fleet = fleet

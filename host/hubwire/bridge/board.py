@@ -12,8 +12,8 @@ import time
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple
 
 from ..descriptor import Channel, Descriptor
-from ..diagnose import access_error, error_type
-from ..errors import HubwireError, InvalidValue, NakError
+from ..diagnose import access_error
+from ..errors import HubwireError, InvalidValue, NakError, error_type
 from ..session import ReceivedEvent, StreamSample
 from . import ha
 from .topics import OFFLINE, ONLINE, BadPayload, dumps, parse_value, to_json

@@ -58,7 +58,7 @@ class BrokerSettings:
         return ctx
 
     def bridge_kwargs(self) -> Dict[str, Any]:
-        """Keyword arguments of :func:`hubwire.service.mqtt.run_bridge` beyond host and port."""
+        """Keyword arguments of :func:`hubwire.bridge.mqtt.run_bridge` beyond host and port."""
         kw: Dict[str, Any] = {}
         if self.username is not None:
             kw.update(username=self.username, password=self.password)
@@ -162,7 +162,7 @@ def settings_from_args(args: Any) -> Optional[BrokerSettings]:
 
 
 def argv_options() -> List[Tuple[Tuple[str, ...], Dict[str, Any]]]:
-    """The ``serve`` options for the broker (added by ``hubwire.service.main``)."""
+    """The ``serve`` options for the broker (added by ``hubwire.cli.serve``)."""
     return [
         (("--mqtt-config",), dict(metavar="FILE", default=None,
                                   help="MQTT settings from this TOML file (docs/MQTT.md); options below override it")),

@@ -11,11 +11,11 @@ import sys
 from typing import Any, Awaitable, Callable, Dict, List, Optional, Sequence, Tuple
 
 from ..errors import HubwireError
-from .broker import BrokerSettings, argv_options, settings_from_args
-from .broker import broker_address as parse_address
-from .fleet import Fleet
-from .protocol import default_serve_socket
-from .server import Server
+from ..bridge.broker import BrokerSettings, argv_options, settings_from_args
+from ..bridge.broker import broker_address as parse_address
+from ..daemon.fleet import Fleet
+from ..client.protocol import default_serve_socket
+from ..daemon.server import Server
 
 __all__ = ["add_commands", "serve", "cmd_serve", "cmd_list", "SHUTDOWN_S"]
 
@@ -45,7 +45,7 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
     s.add_argument("--timeout", type=float, default=5.0, help="connect deadline per board in seconds (default 5)")
     s.add_argument("--poll", type=float, default=0.5, help="seconds between port scans (default 0.5)")
     s.add_argument("--mqtt", metavar="HOST:PORT", default=None,
-                   help="also run the MQTT bridge to this broker (hubwire.service.mqtt)")
+                   help="also run the MQTT bridge to this broker (hubwire.bridge.mqtt)")
     s.add_argument("--mqtt-id", default=None, metavar="ID",
                    help="this service's id on the broker (default: the host name); each service on one "
                         "broker needs its own")
@@ -69,7 +69,7 @@ async def serve(fleet: Fleet, socket: str, bridge: Optional[Callable[..., Any]] 
                 clients: Sequence[Callable[[Fleet], Awaitable[Any]]] = (), mqtt_id: Optional[str] = None,
                 broker: Optional[BrokerSettings] = None) -> None:
     """Run ``fleet`` and its client socket until cancelled (SIGTERM / SIGINT from :func:`cmd_serve`);
-    with ``bridge`` (``hubwire.service.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``
+    with ``bridge`` (``hubwire.bridge.mqtt.run_bridge``), ``bridge(fleet, host=, port=)`` for ``mqtt``
     (or for ``broker``: then with its username, password, TLS and reply prefixes too); each of
     ``clients`` (the dashboard) runs on the fleet as one more task until the service stops. A stop
     takes at most :data:`SHUTDOWN_S`."""
@@ -115,9 +115,9 @@ def broker_address(where: str) -> Tuple[str, int]:
 
 
 def mqtt_bridge() -> Callable[..., Any]:
-    """``hubwire.service.mqtt.run_bridge``, or SystemExit saying it is missing."""
+    """``hubwire.bridge.mqtt.run_bridge``, or SystemExit saying it is missing."""
     try:
-        from .mqtt import run_bridge
+        from ..bridge.mqtt import run_bridge
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --mqtt needs the MQTT client libraries, which this installation "
                          f"lacks ({e}); install them with: pip install 'hubwire[mqtt]'") from None
@@ -159,7 +159,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         raise SystemExit(f"hubwire serve: MQTT settings: {e}") from None
     bridge = mqtt_bridge() if broker is not None else None
     clients = [dashboard(args)] if args.http is not None else []
-    from .store import Store, state_dir
+    from ..daemon.store import Store, state_dir
 
     try:
         store = Store(state_dir(args.state))
@@ -186,8 +186,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from ..cli_support import print_json
-    from .client import Connection
+    from .support import print_json
+    from ..client.connection import Connection
 
     async def boards() -> List[Any]:
         conn = await Connection.open()

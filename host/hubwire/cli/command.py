@@ -1,5 +1,5 @@
 """``hubwire`` command line: ports, info, get, set, call, watch (all with ``--json``); serve and list
-(:mod:`hubwire.service.main`); dashboard (:mod:`hubwire.dashboard`)."""
+(:mod:`hubwire.cli.serve`); dashboard (:mod:`hubwire.dashboard`)."""
 from __future__ import annotations
 
 import argparse
@@ -7,13 +7,14 @@ import os
 import sys
 from typing import Any, Optional, Sequence
 
-from . import __version__, diagnose
-from .cli_support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
+from .. import __version__, diagnose
+from .support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
                           print_json)
-from .cli_mission import run_mission
-from .cli_watch import cmd_watch, watch_duration
-from .device import channel_table, KNOWN_USB_VIDS
-from .errors import HubwireError, NakError
+from .mission import run_mission
+from .watch import cmd_watch, watch_duration
+from ..device import channel_table
+from ..errors import HubwireError, error_json
+from ..ports import board_kind, serial_ports
 
 __all__ = ["main", "build_parser", "watch_duration"]
 
@@ -21,13 +22,10 @@ __all__ = ["main", "build_parser", "watch_duration"]
 # ------------------------------------------------------------------------------------- commands
 
 def cmd_ports(args: argparse.Namespace) -> int:
-    from serial.tools import list_ports
-
-    ports = sorted(list_ports.comports(), key=lambda p: p.device)
     rows = []
-    for p in ports:
+    for p in serial_ports():
         rows.append({"device": p.device, "vid": p.vid, "pid": p.pid, "description": p.description,
-                     "serial_number": p.serial_number, "board": KNOWN_USB_VIDS.get(p.vid) if p.vid else None})
+                     "serial_number": p.serial_number, "board": board_kind(p)})
     if args.json:
         print_json(rows)
         return 0
@@ -104,7 +102,8 @@ def cmd_call(args: argparse.Namespace) -> int:
 _VALUE_HELP = ("the new value: a number (1.5, -2, 0x10), a bool (true/false, 1/0, on/off, yes/no), text as "
                "it is (quote it for the shell), JSON for arrays and structs ('[1, 2, 3]', '{\"x\": 1}')")
 _EPILOG = ("exit status: 0 done, 1 error, 2 usage error, 130 Ctrl-C, 141 output closed (| head).\n"
-           "With --json an error is one line on stdout: {\"error\": TYPE, \"message\": TEXT}, where TYPE is\n"
+           "With --json an error is one line on stdout: {\"error\": TYPE, \"message\": TEXT} (a Nak adds \"nak\",\n"
+           "\"code\" and \"channel\", an InvalidValue \"code\"), where TYPE is\n"
            + "".join(f"  {k:<21} {v}\n" for k, v in diagnose.ERROR_TYPES.items()))
 
 
@@ -168,10 +167,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wait for the board to appear and to come back when it goes away (default: end with "
                         "an error once it has been gone for --timeout seconds)")
     s.set_defaults(fn=cmd_watch)
-    from .service.main import add_commands
+    from .serve import add_commands
 
     add_commands(sub, out)
-    from .dashboard.cli import add_parser as add_dashboard  # imports NiceGUI only when run
+    from ..dashboard.cli import add_parser as add_dashboard  # imports NiceGUI only when run
 
     add_dashboard(sub, [common])
     return p
@@ -215,10 +214,7 @@ def _stdout_closed() -> bool:
 def _error(args: argparse.Namespace, exc: BaseException) -> None:
     """Report ``exc`` once: as JSON on stdout with ``--json``, else as text on stderr."""
     if getattr(args, "json", False):
-        obj = {"error": diagnose.error_type(exc), "message": str(exc)}
-        if isinstance(exc, NakError):
-            obj["nak"] = exc.error
-        print_json(obj)
+        print_json(error_json(exc))
     else:
         sys.stderr.write(f"hubwire: {exc}\n")
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import asyncio
 from typing import Any, Dict, List
 
-from ..cli_support import jsonable
+from ..client.protocol import jsonable
 from ..errors import HubwireError, LinkLost
 from .store import StoredEvent
 

@@ -95,7 +95,7 @@ class ClientQueue(asyncio.Queue[aiomqtt.Message]):
 
 
 class BoardLike(Protocol):
-    """A board as the service's fleet has it (docs of ``hubwire.service.fleet.Board``)."""
+    """A board as the service's fleet has it (docs of ``hubwire.daemon.fleet.Board``)."""
 
     key: str
     name: str
@@ -121,7 +121,7 @@ async def run_bridge(fleet: FleetLike, host: str, port: int = 1883, *, prefix: s
 
     ``settings`` are fields of :class:`BridgeConfig` (``discovery_prefix``, ``service_id``,
     ``max_rate_hz``, ``streams``, ...), or pass a whole ``config``. ``tls_context``: connect over
-    TLS (``hubwire.service.broker.BrokerSettings.tls_context``); ``reply_prefixes``: where replies
+    TLS (``hubwire.bridge.broker.BrokerSettings.tls_context``); ``reply_prefixes``: where replies
     may be published (default: under ``prefix``).
     """
     cfg = config or BridgeConfig(prefix=prefix, **settings)

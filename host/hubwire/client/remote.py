@@ -16,7 +16,7 @@ from ..session.events import QueueSink
 from ..session.runner import ThreadDispatcher, release_loop, run_sync
 from ..wire import messages as m
 from ..wire.frame import Frame
-from .client import AsyncRemoteDevice
+from .connection import AsyncRemoteDevice
 from .streams import ended
 
 __all__ = ["RemoteSession"]

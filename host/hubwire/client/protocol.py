@@ -5,12 +5,15 @@ Shared by the server and the client: where the socket is, how a board and an err
 from __future__ import annotations
 
 import json
+import math
 import os
 from typing import Any, Dict, Optional
 
-from ..errors import HubwireError, InvalidValue, LinkLost, NakError, Timeout
+from .. import errors
+from ..errors import HubwireError, ServiceError, ServiceNotRunning
+from .sockdir import log, untrusted
 
-__all__ = ["PROTOCOL", "socket_path", "default_serve_socket", "board_json", "error_json", "raise_error",
+__all__ = ["PROTOCOL", "jsonable", "socket_path", "default_serve_socket", "board_json", "error_json", "raise_error",
            "ServiceNotRunning", "ServiceError", "encode", "SYSTEM_SOCKET", "Usage", "Busy"]
 
 #: version of this protocol; a client refuses a service that speaks another
@@ -23,12 +26,6 @@ TMP = "/tmp"
 MAX_LINE = 1 << 20
 
 
-class ServiceNotRunning(HubwireError):
-    """No ``hubwire serve`` answers on the socket."""
-
-    kind = "ServiceNotRunning"
-
-
 class Usage(HubwireError):
     """A request the protocol does not allow (a field of the wrong type, a ``sub`` id in use)."""
 
@@ -39,14 +36,6 @@ class Busy(HubwireError):
     """A per-client limit of the service was reached (docs/SERVICE.md "Limits")."""
 
     kind = "Busy"
-
-
-class ServiceError(HubwireError):
-    """An error the service reported that has no class of its own here (``kind`` is its type)."""
-
-    def __init__(self, kind: str, message: str) -> None:
-        super().__init__(message)
-        self.kind = kind
 
 
 def _user_socket() -> Optional[str]:
@@ -66,8 +55,6 @@ def socket_path() -> Optional[str]:
     env = os.environ.get("HUBWIRE_SOCKET")
     if env:
         return env
-    from .sockdir import log, untrusted
-
     for p in (_user_socket(), _tmp_socket(), SYSTEM_SOCKET):
         if p and os.path.exists(p):
             why = untrusted(os.path.dirname(p)) if p != SYSTEM_SOCKET else None
@@ -96,41 +83,27 @@ def encode(obj: Dict[str, Any]) -> bytes:
         return (json.dumps(obj, separators=(",", ":")) + "\n").encode("ascii")
 
 
+def jsonable(v: Any) -> Any:
+    """A value as JSON on the socket (and in the command line's ``--json``): structs as objects, arrays
+    as lists, NaN and the infinities as text."""
+    if isinstance(v, tuple) and hasattr(v, "_asdict"):
+        return {k: jsonable(x) for k, x in v._asdict().items()}
+    if isinstance(v, (tuple, list)):
+        return [jsonable(x) for x in v]
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    return v
+
+
 def board_json(b: Any) -> Dict[str, Any]:
     return {"key": b.key, "name": b.name, "board_id": b.board_id, "port": b.port, "state": b.state,
             "attached": b.attached}
 
 
 def error_json(exc: BaseException) -> Dict[str, Any]:
-    from ..diagnose import error_type
-
-    kind = getattr(exc, "kind", None)
-    if not isinstance(kind, str):
-        kind = "UnknownChannel" if isinstance(exc, KeyError) else error_type(exc)
-    text = str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)
-    out: Dict[str, Any] = {"ok": False, "error": kind, "message": text}
-    if isinstance(exc, NakError):
-        out.update(nak=exc.error, code=exc.code, channel=exc.channel)
-    elif isinstance(exc, InvalidValue):
-        out.update(code=exc.code)
-    return out
+    return {"ok": False, **errors.error_json(exc)}
 
 
 def raise_error(msg: Dict[str, Any]) -> None:
     """Raise the exception an error reply stands for (the same class a direct connection raises)."""
-    kind, text = str(msg.get("error", "Error")), str(msg.get("message", ""))
-    if kind == "Nak":
-        e: HubwireError = NakError(int(msg.get("code", 0)), msg.get("channel"))
-        e.args = (text,)
-        raise e
-    if kind == "InvalidValue":
-        raise InvalidValue(text, int(msg.get("code", 0)))
-    if kind == "Timeout":
-        raise Timeout(text)
-    if kind == "LinkLost":
-        raise LinkLost(text)
-    if kind == "UnknownBoard":
-        from .fleet import UnknownBoard
-
-        raise UnknownBoard(text)
-    raise ServiceError(kind, text)
+    raise errors.error_from(msg)
