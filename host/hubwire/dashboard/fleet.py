@@ -158,7 +158,7 @@ class DeviceFleet:
         """Open ``port`` (retrying while it is absent), then follow its state until cancelled."""
         while True:
             try:
-                dev = await aio.connect(port, **self.connect_kwargs)
+                dev = await aio.connect(port, **{"hub_later": True, **self.connect_kwargs})
                 break
             except (HubwireError, OSError) as e:
                 self.pending[port] = str(e)

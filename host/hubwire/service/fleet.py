@@ -282,7 +282,8 @@ class Fleet:
             if self._resumable is None:
                 self._resumable = set(self.store.hub_session_ports()) if self.store is not None else set()
             hs = durable.hub_session(self.store, info.path, info.path in self._resumable)
-            dev = await connect(transport=SerialTransport(info.path), timeout=self.connect_timeout,
+            # the service offers the board's hub events itself (durable.offer_hub_events)
+            dev = await connect(transport=SerialTransport(info.path), timeout=self.connect_timeout, hub_later=True,
                                 cache_dir=self.cache_dir, hub_session=hs)
             self._resumable.discard(info.path)
         except asyncio.CancelledError:
