@@ -4,6 +4,7 @@ from __future__ import annotations
 from typing import Any, Callable, List, Optional, Tuple, cast
 
 from . import ops
+from .board import BoardAPI
 from .descriptor import Channel, Descriptor
 from .diagnose import ACCESS_WORDS
 from .errors import HubwireError, NakError, Timeout
@@ -46,7 +47,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
 
         remote = open_routed(url, timeout, kwargs)
         if remote is not None:
-            return Device(remote)
+            from .service.remote import RemoteDevice
+
+            return RemoteDevice(remote)
     if url is None and transport is None:
         url = find_port()
     session = Session(url, baudrate, connect_timeout=timeout, transport=transport, **kwargs)
@@ -79,7 +82,7 @@ def channel_table(desc: Descriptor, hub: bool = False) -> str:
     return "\n".join(lines)
 
 
-class Device(HubMethods):
+class Device(HubMethods, BoardAPI):
     """A connected device: its channels as items, and as attributes where the name is free.
 
     - ``dev["left"]`` / ``dev.left`` reads a readable channel;
@@ -93,6 +96,9 @@ class Device(HubMethods):
     - ``print(dev.table())`` shows the table of channels;
     - the other direction: ``dev.provide``, ``dev.accept``, ``dev.action``, ``dev.event`` declare
       hub channels the device may use, ``dev.notify(name, value)`` sends it a hub event.
+
+    It implements :class:`hubwire.board.BoardAPI` on both roads: over a direct session, and through
+    ``hubwire serve`` (:class:`hubwire.service.remote.RemoteDevice`).
 
     Methods and properties of this class always win: a channel called ``close``, ``read``,
     ``session``, ``name`` or ``__class__`` never hides or replaces one. Reach it with ``dev["close"]``

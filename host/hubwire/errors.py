@@ -105,3 +105,12 @@ class MissionCancelled(MissionError):
 
 class MissionLost(MissionError):
     """The run's outcome can never arrive: the board rebooted while it ran (or the session closed)."""
+
+
+class NotRoutedYet(HubwireError):
+    """What a board reached through ``hubwire serve`` cannot do yet: ``what`` (e.g. ``"missions"``)
+    and the message says what to do instead (usually: a program that opens the board's port itself)."""
+
+    def __init__(self, what: str, instead: str) -> None:
+        super().__init__(f"{what} are not routed through the service (hubwire serve) yet: {instead}")
+        self.what = what

@@ -11,12 +11,15 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Set
 
 from .. import ops
+from ..board import AsyncBoardAPI
 from ..descriptor import Channel, Descriptor
 from ..descriptor_parse import parse_descriptor
-from ..errors import HubwireError, LinkLost
+from ..errors import HubwireError, LinkLost, Timeout
+from ..hub import HubChannel, HubChannels
+from ..routed_hub import RoutedHubChannels, hub_event_payload, hub_not_routed
 from ..session import LinkHealth, ReceivedEvent, StreamSample
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path
 from .streams import RemoteEvents, RemoteStream
@@ -160,9 +163,10 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
     return dev
 
 
-class AsyncRemoteDevice:
-    """A board through ``hubwire serve``: read/write/call/stream/events/on as :class:`AsyncDevice`.
-    Closing it ends this client's subscriptions; the board stays connected to the service."""
+class AsyncRemoteDevice(AsyncBoardAPI):
+    """A board through ``hubwire serve``: :class:`hubwire.board.AsyncBoardAPI`, as
+    :class:`hubwire.aio.AsyncDevice` is. Closing it ends this client's subscriptions; the board stays
+    connected to the service."""
 
     def __init__(self, conn: Connection, board: Dict[str, Any], desc: Descriptor) -> None:
         self.conn = conn
@@ -171,6 +175,9 @@ class AsyncRemoteDevice:
         self._desc = desc
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
+        self._hub = RoutedHubChannels()
+        self._notifying: Set["asyncio.Task[Dict[str, Any]]"] = set()  # notify requests not answered yet
+        self._notify_errors: List[BaseException] = []
 
     async def _watch(self) -> None:
         sub, _ = await self.conn.subscribe("boards", self._board_changed, board=self.key)
@@ -209,8 +216,9 @@ class AsyncRemoteDevice:
     def url(self) -> str:
         return f"service:{self.key}"
 
-    @property
-    def board_id(self) -> Optional[str]:
+    async def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        """The id the service knows the board by: its USB serial number when its port has one, else
+        the board's own id (as :meth:`hubwire.aio.AsyncDevice.board_id` reads it), else None."""
         bid = self.board.get("board_id")
         return None if bid is None else str(bid)
 
@@ -219,6 +227,7 @@ class AsyncRemoteDevice:
         return LinkHealth(self.state, None, None, 0, None, {}, {})
 
     async def fetch_health(self) -> LinkHealth:
+        """The link's health as the service measures it."""
         h = (await self.conn.request("health", board=self.key))["health"]
         return LinkHealth(**h) if h else self.health()
 
@@ -251,16 +260,69 @@ class AsyncRemoteDevice:
 
     async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
         """Missions are not routed through the service: a clear error (after checking the name)."""
-        from ..job import NOT_ROUTED
+        from ..job import missions_not_routed
 
         ops.mission_start(self._desc, name, goal)  # a non-mission or a bad goal says so first
-        raise HubwireError(NOT_ROUTED)
+        raise missions_not_routed()
+
+    # ------------------------------------------------------------------ hub channels (PROTOCOL.md 10)
+
+    @property
+    def hub(self) -> HubChannels:
+        """Empty: hub channels a client declares are not routed yet (declaring raises NotRoutedYet)."""
+        return self._hub
+
+    def provide(self, name: str, source: Any, **kwargs: Any) -> HubChannel:
+        return self._hub.provide(name, source, **kwargs)
+
+    def accept(self, name: str, on_write: Any = None, **kwargs: Any) -> Any:
+        return self._hub.accept(name, on_write, **kwargs)
+
+    def action(self, name: str, fn: Any = None, **kwargs: Any) -> Any:
+        return self._hub.action(name, fn, **kwargs)
+
+    def event(self, name: str, **kwargs: Any) -> HubChannel:
+        return self._hub.event(name, **kwargs)
+
+    def hub_binding(self) -> Dict[str, str]:
+        raise hub_not_routed()
+
+    def notify(self, name: str, value: Any) -> None:
+        """Hand hub event ``name`` to the service (checked here first, as a direct ``notify``): it
+        stores it and sends it exactly once, in order, also after its own restart. Returns at once;
+        :meth:`wait_notified` waits until the service has stored every one."""
+        raw = hub_event_payload(self._desc, name, value)
+        task = asyncio.get_running_loop().create_task(
+            self.conn.request("notify", board=self.key, channel=name, raw=raw.hex()))
+        self._notifying.add(task)
+        task.add_done_callback(self._notified)
+
+    def _notified(self, task: "asyncio.Task[Dict[str, Any]]") -> None:
+        self._notifying.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            self._notify_errors.append(task.exception())  # type: ignore[arg-type]
+
+    @property
+    def notifications_pending(self) -> int:
+        """Hub events handed to :meth:`notify` that the service has not stored yet."""
+        return len(self._notifying)
+
+    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once the service has stored every hub event :meth:`notify` handed it (it then
+        delivers each exactly once); raises the first refusal, :class:`Timeout` after ``timeout`` s."""
+        if self._notifying:
+            _, late = await asyncio.wait(set(self._notifying), timeout=timeout)
+            if late:
+                raise Timeout(f"{len(late)} hub events still wait for hubwire serve after {timeout} s")
+        if self._notify_errors:
+            err, self._notify_errors = self._notify_errors[0], []
+            raise err
 
     def sample(self, ch: Channel, s: Dict[str, Any]) -> StreamSample:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),
                             int(s["lost"]), time.monotonic(), int(s["gap"]))
 
-    def event(self, e: Dict[str, Any]) -> ReceivedEvent:
+    def decode_event(self, e: Dict[str, Any]) -> ReceivedEvent:
         ch = self.channel(e["name"])
         return ReceivedEvent(ch.name, ch.codec.decode(bytes.fromhex(e["raw"])), int(e["seq"]), time.monotonic(), ch.id)
 
@@ -285,7 +347,7 @@ class AsyncRemoteDevice:
 
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                ev = self.event(msg["event"])
+                ev = self.decode_event(msg["event"])
                 res = callback(ev if key is None else ev.value)
                 if asyncio.iscoroutine(res):
                     asyncio.get_running_loop().create_task(res)
