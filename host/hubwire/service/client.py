@@ -176,6 +176,7 @@ class AsyncRemoteDevice(AsyncBoardAPI):
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
         self._hub = RoutedHubChannels()
+        self._closed = False
         self._notifying: Set["asyncio.Task[Dict[str, Any]]"] = set()  # notify requests not answered yet
         self._notify_errors: List[BaseException] = []
 
@@ -209,8 +210,12 @@ class AsyncRemoteDevice(AsyncBoardAPI):
 
     @property
     def state(self) -> str:
-        """The board's state as the service sees it (``"unplugged"`` too)."""
-        return str(self.board["state"])
+        """``"ready"``, ``"connecting"``, ``"lost"`` (also while unplugged: ``board["state"]`` tells
+        the service's own word) or ``"closed"`` once this client closed it, as on a direct session."""
+        if self._closed:
+            return "closed"
+        state = str(self.board["state"])
+        return "lost" if state == "unplugged" else state
 
     @property
     def url(self) -> str:
@@ -359,6 +364,7 @@ class AsyncRemoteDevice(AsyncBoardAPI):
         return remove
 
     async def close(self) -> None:
+        self._closed = True
         await self.conn.close()
 
     async def __aenter__(self) -> "AsyncRemoteDevice":

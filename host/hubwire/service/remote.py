@@ -27,7 +27,7 @@ from .streams import ended
 __all__ = ["RemoteSession", "RemoteDevice"]
 
 _ident = id  # (``id`` is a channel id in the methods below)
-_STATES = {"ready": State.READY, "connecting": State.CONNECTING, "lost": State.LOST, "unplugged": State.LOST}
+_STATES = {"ready": State.READY, "connecting": State.CONNECTING, "lost": State.LOST, "closed": State.CLOSED}
 
 
 class RemoteSession:

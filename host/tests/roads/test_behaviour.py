@@ -15,6 +15,7 @@ from typing import Any, Callable, Dict, List
 import pytest
 
 import hubwire
+from hubwire.board import BoardAPI
 
 from .conftest import Roads
 
@@ -22,8 +23,6 @@ Open = Callable[..., hubwire.Device]
 
 
 def test_declares_the_board_interface(board: Open) -> None:
-    from hubwire.board import BoardAPI
-
     dev = board("rover")
     assert isinstance(dev, BoardAPI)
     assert (dev.name, dev.firmware, dev.state) == ("rover", "1.0.0", "ready")
