@@ -11,15 +11,14 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from typing import Any, Callable, Dict, List, Optional, Set
+from typing import Any, Callable, Dict, List, Optional
 
 from .. import ops
 from ..board import AsyncBoardAPI
 from ..descriptor import Channel, Descriptor
 from ..descriptor_parse import parse_descriptor
-from ..errors import HubwireError, LinkLost, Timeout
-from ..hub import HubChannel, HubChannels
-from ..routed_hub import RoutedHubChannels, hub_event_payload, hub_not_routed
+from ..errors import HubwireError, LinkLost
+from ..routed_hub import AsyncRoutedHub
 from ..session import LinkHealth, ReceivedEvent, StreamSample
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path
 from .streams import RemoteEvents, RemoteStream
@@ -157,13 +156,14 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
         reply = await conn.request("describe", board=board, timeout=timeout)
         dev = AsyncRemoteDevice(conn, reply["board"], parse_descriptor(reply["descriptor"]))
         await dev._watch()
+        await dev._mark_events()
     except BaseException:
         await conn.close()
         raise
     return dev
 
 
-class AsyncRemoteDevice(AsyncBoardAPI):
+class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
     """A board through ``hubwire serve``: :class:`hubwire.board.AsyncBoardAPI`, as
     :class:`hubwire.aio.AsyncDevice` is. Closing it ends this client's subscriptions; the board stays
     connected to the service."""
@@ -175,14 +175,41 @@ class AsyncRemoteDevice(AsyncBoardAPI):
         self._desc = desc
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
-        self._hub = RoutedHubChannels()
+        AsyncRoutedHub.__init__(self)
+        self._since: Optional[int] = None  # the service's last event id when this client connected
+        self._delivered: Dict[str, int] = {}  # per event channel: the newest id a listener here had
         self._closed = False
-        self._notifying: Set["asyncio.Task[Dict[str, Any]]"] = set()  # notify requests not answered yet
-        self._notify_errors: List[BaseException] = []
 
     async def _watch(self) -> None:
         sub, _ = await self.conn.subscribe("boards", self._board_changed, board=self.key)
         self._subs.append(sub)
+
+    async def _mark_events(self) -> None:
+        sub, reply = await self.conn.subscribe("events", lambda _m: None, board=self.key, names=[])
+        await self.conn.unsubscribe(sub)
+        last = reply.get("last")
+        self._since = last if isinstance(last, int) and not isinstance(last, bool) else None
+
+    def listen(self, names: List[str], handler: Handler) -> "tuple[int, asyncio.Future[Dict[str, Any]]]":
+        """Subscribe one listener to the events of ``names`` (all when empty), as a direct session
+        hands them: first those since this client connected that no listener here has had yet (the
+        service replays them: ``after``), then every new one. Returns the subscription and its answer."""
+        extra = {} if self._since is None else {"after": self._since}
+        answered: List["asyncio.Future[Dict[str, Any]]"] = []
+
+        def push(msg: Dict[str, Any]) -> None:
+            e = msg.get("event")
+            ch = self._desc.by_name(str(e.get("name"))) if isinstance(e, dict) else None
+            eid = e.get("id") if isinstance(e, dict) else None
+            if ch is not None and isinstance(eid, int):
+                had = self._delivered.get(ch.name, -1)
+                if not answered[0].done() and eid <= had:
+                    return  # replayed, but another listener here had it already
+                self._delivered[ch.name] = max(had, eid)
+            handler(msg)
+        sub, fut = self.conn.subscribe_nowait("events", push, board=self.key, names=names, **extra)
+        answered.append(fut)
+        return sub, fut
 
     def _board_changed(self, msg: Dict[str, Any]) -> None:
         b = msg.get("board")
@@ -270,59 +297,6 @@ class AsyncRemoteDevice(AsyncBoardAPI):
         ops.mission_start(self._desc, name, goal)  # a non-mission or a bad goal says so first
         raise missions_not_routed()
 
-    # ------------------------------------------------------------------ hub channels (PROTOCOL.md 10)
-
-    @property
-    def hub(self) -> HubChannels:
-        """Empty: hub channels a client declares are not routed yet (declaring raises NotRoutedYet)."""
-        return self._hub
-
-    def provide(self, name: str, source: Any, **kwargs: Any) -> HubChannel:
-        return self._hub.provide(name, source, **kwargs)
-
-    def accept(self, name: str, on_write: Any = None, **kwargs: Any) -> Any:
-        return self._hub.accept(name, on_write, **kwargs)
-
-    def action(self, name: str, fn: Any = None, **kwargs: Any) -> Any:
-        return self._hub.action(name, fn, **kwargs)
-
-    def event(self, name: str, **kwargs: Any) -> HubChannel:
-        return self._hub.event(name, **kwargs)
-
-    def hub_binding(self) -> Dict[str, str]:
-        raise hub_not_routed()
-
-    def notify(self, name: str, value: Any) -> None:
-        """Hand hub event ``name`` to the service (checked here first, as a direct ``notify``): it
-        stores it and sends it exactly once, in order, also after its own restart. Returns at once;
-        :meth:`wait_notified` waits until the service has stored every one."""
-        raw = hub_event_payload(self._desc, name, value)
-        task = asyncio.get_running_loop().create_task(
-            self.conn.request("notify", board=self.key, channel=name, raw=raw.hex()))
-        self._notifying.add(task)
-        task.add_done_callback(self._notified)
-
-    def _notified(self, task: "asyncio.Task[Dict[str, Any]]") -> None:
-        self._notifying.discard(task)
-        if not task.cancelled() and task.exception() is not None:
-            self._notify_errors.append(task.exception())  # type: ignore[arg-type]
-
-    @property
-    def notifications_pending(self) -> int:
-        """Hub events handed to :meth:`notify` that the service has not stored yet."""
-        return len(self._notifying)
-
-    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
-        """Return once the service has stored every hub event :meth:`notify` handed it (it then
-        delivers each exactly once); raises the first refusal, :class:`Timeout` after ``timeout`` s."""
-        if self._notifying:
-            _, late = await asyncio.wait(set(self._notifying), timeout=timeout)
-            if late:
-                raise Timeout(f"{len(late)} hub events still wait for hubwire serve after {timeout} s")
-        if self._notify_errors:
-            err, self._notify_errors = self._notify_errors[0], []
-            raise err
-
     def sample(self, ch: Channel, s: Dict[str, Any]) -> StreamSample:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),
                             int(s["lost"]), time.monotonic(), int(s["gap"]))
@@ -356,7 +330,7 @@ class AsyncRemoteDevice(AsyncBoardAPI):
                 res = callback(ev if key is None else ev.value)
                 if asyncio.iscoroutine(res):
                     asyncio.get_running_loop().create_task(res)
-        sub, fut = self.conn.subscribe_nowait("events", handler, board=self.key, names=[] if key is None else [key])
+        sub, fut = self.listen([] if key is None else [key], handler)
         self._subs.append(sub)
         fut.add_done_callback(lambda f: None if f.result().get("ok") else self.conn._subs.pop(sub, None))
         def remove() -> None:

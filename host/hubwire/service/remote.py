@@ -120,7 +120,8 @@ class RemoteSession:
 
     def _events(self, names: Optional[List[str]], handler: Callable[[Dict[str, Any]], None]) -> int:
         async def start() -> int:
-            sub, _ = await self.remote.conn.subscribe("events", handler, board=self.remote.key, names=names or [])
+            sub, fut = self.remote.listen(names or [], handler)
+            await self.remote.conn.confirm(sub, fut)
             return sub
         return self._run(start())  # type: ignore[no-any-return]
 

@@ -195,3 +195,18 @@ def test_repr_and_table_agree(both: Callable[..., Dict[str, hubwire.Device]], ro
     assert [(c.id, c.name, c.access, c.type_name, c.unit, c.min, c.max) for c in direct.channels] == \
         [(c.id, c.name, c.access, c.type_name, c.unit, c.min, c.max) for c in routed.channels]
     assert sorted(dir(devs["direct"])) == sorted(dir(devs["routed"]))
+
+
+def test_events_before_the_first_listener_are_kept_for_it(board: Open) -> None:
+    dev = board("rover")
+    assert dev.selftest(2) == 2  # nobody listens yet
+    time.sleep(1.0)
+    heard: List[Any] = []
+    dev.on("bumper", heard.append)  # the first listener gets them
+    deadline = time.monotonic() + 10
+    while len(heard) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    with dev.events("bumper") as later:  # a second listener does not
+        time.sleep(0.5)
+        assert later.get(timeout=0.5) is None
+    assert heard == [True, False]

@@ -172,3 +172,16 @@ def test_errors_are_the_same_on_both_roads(roads: Roads) -> None:
 
 async def _call(case: Callable[[Any], Any], dev: Any) -> Any:
     return case(dev)
+
+
+def test_events_before_the_first_listener_are_kept_for_it(roads: Roads, road: str) -> None:
+    async def main() -> None:
+        async with aconnect(roads, road, "rover") as dev:
+            assert await dev.call("selftest", 2) == 2  # nobody listens yet
+            await asyncio.sleep(1.0)
+            async with dev.events("bumper", timeout=5) as first:
+                got = [await first.get(5), await first.get(5)]
+                assert [e.value for e in got if e is not None] == [True, False]
+                async with dev.events(timeout=1) as second:
+                    assert await second.get(1) is None
+    run(main())
