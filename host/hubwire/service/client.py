@@ -259,7 +259,9 @@ class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
         return LinkHealth(self.state, None, None, 0, None, {}, {})
 
     async def fetch_health(self) -> LinkHealth:
-        """The link's health as the service measures it."""
+        """The link's health as the service measures it (once closed: :meth:`health`, as direct)."""
+        if self._closed:
+            return self.health()
         h = (await self.conn.request("health", board=self.key))["health"]
         return LinkHealth(**h) if h else self.health()
 

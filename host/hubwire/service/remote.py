@@ -63,6 +63,8 @@ class RemoteSession:
         return run_sync(self._loop, aw)
 
     def health(self) -> LinkHealth:
+        if self._loop is None:  # closed: what a closed direct session reports, without asking
+            return LinkHealth("closed", None, None, 0, None, {}, {})
         return self._run(self.remote.fetch_health())  # type: ignore[no-any-return]
 
     def board_id(self, timeout: Optional[float] = None) -> Optional[str]:

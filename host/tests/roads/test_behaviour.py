@@ -16,6 +16,7 @@ import pytest
 
 import hubwire
 from hubwire.board import BoardAPI
+from hubwire.wire.messages import NakCode
 
 from .conftest import Roads
 
@@ -50,7 +51,10 @@ def test_write_refused_with_reason(board: Open) -> None:
     act = board("actions")
     with pytest.raises(hubwire.NakError) as e:
         act.blink = 11  # the sketch refuses it
-    assert e.value.error == "REJECTED"
+    assert (e.value.error, e.value.code, e.value.channel) == ("REJECTED", NakCode.REJECTED, "blink")
+    with pytest.raises(hubwire.InvalidValue) as bad:
+        act.blink = 256
+    assert bad.value.code == NakCode.OUT_OF_RANGE  # as the board would answer
     assert dev.applied == applied
 
 
@@ -210,3 +214,17 @@ def test_events_before_the_first_listener_are_kept_for_it(board: Open) -> None:
         time.sleep(0.5)
         assert later.get(timeout=0.5) is None
     assert heard == [True, False]
+
+
+def test_a_closed_board_says_so_the_same_on_both_roads(both: Callable[..., Dict[str, hubwire.Device]]) -> None:
+    devs = both("rover")
+    for dev in devs.values():
+        dev.close()
+        assert dev.state == "closed"
+    cases: List[Callable[[hubwire.Device], Any]] = [
+        lambda d: d.read("left"), lambda d: d.write("left", 0.0), lambda d: d.call("beep", 1),
+        lambda d: d.stream("imu"), lambda d: d.events("bumper"), lambda d: d.health().state,
+    ]
+    for i, case in enumerate(cases):
+        direct, routed = (_outcome(lambda: case(devs[road])) for road in ("direct", "routed"))
+        assert direct == routed, f"case {i}: direct {direct!r}, routed {routed!r}"

@@ -28,7 +28,7 @@ def test_declares_the_board_interface(roads: Roads, road: str) -> None:
             assert isinstance(dev, AsyncBoardAPI)
             assert (dev.name, dev.state, dev.url.startswith("service:")) == ("rover", "ready", road == "routed")
             assert dev.channel("imu").streamable
-        assert dev.state == "closed"
+        assert dev.state == "closed" and (await dev.fetch_health()).state == "closed"
     run(main())
 
 
