@@ -22,7 +22,9 @@ raises at once)::
 
 Types are written as on the device: ``"f32"``, ``"i16[3]"`` (fixed array), ``"str[16]"`` (bounded
 string), ``"struct"`` with ``fields``, or a Python type (``float`` is ``f32``, ``int`` ``i32``,
-``bool``, ``None`` void). The hub describes itself with the same JSON as a device
+``bool``, ``None`` void). A channel typed by ``int`` takes the integer type the connected device
+declares for it (``u8``, ``u16``...; :meth:`HubChannels.fit`). An action handler returning False
+refuses the call (NAK REJECTED) unless the action returns ``bool``. The hub describes itself with the same JSON as a device
 (:meth:`HubChannels.descriptor`), so every declaration is checked by the descriptor parser.
 """
 from __future__ import annotations
@@ -208,7 +210,8 @@ class HubChannels:
                returns: TypeSpec = None, doc: Optional[str] = None) -> Any:
         """An action the device may call with one argument and a return value; the argument and
         return types come from ``type=`` / ``returns=`` or from ``fn``'s annotations (no parameter:
-        no argument; ``-> None`` or no return annotation: nothing returned). Decorator or direct."""
+        no argument; ``-> None`` or no return annotation: nothing returned); ``fn`` returning False
+        refuses the call (NAK REJECTED) unless the action returns ``bool``. Decorator or direct."""
         def declare(f: Callable[..., Any]) -> HubChannel:
             param = _first_param(f)
             arg = type if type is not None else (_hint(f, param) if param else "void")
