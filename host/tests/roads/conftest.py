@@ -63,6 +63,11 @@ class Roads:
         for emu in self.emulators:
             emu.stop()
 
+    def emulator(self, road: str, sketch: str) -> Emulator:
+        """The emulator the board on ``road`` runs in."""
+        folder = self.direct_dir if road == "direct" else self.served_dir
+        return next(e for e in self.emulators if e.link == os.path.join(folder, sketch))
+
     def target(self, road: str, sketch: str) -> str:
         """What ``connect()`` is given on ``road``: the direct emulator's port, or the board's name."""
         return os.path.join(self.direct_dir, sketch) if road == "direct" else SKETCHES[sketch][1]

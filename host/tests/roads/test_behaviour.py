@@ -228,3 +228,32 @@ def test_a_closed_board_says_so_the_same_on_both_roads(both: Callable[..., Dict[
     for i, case in enumerate(cases):
         direct, routed = (_outcome(lambda: case(devs[road])) for road in ("direct", "routed"))
         assert direct == routed, f"case {i}: direct {direct!r}, routed {routed!r}"
+
+
+def test_link_loss_is_told_and_the_stream_rides_through(board: Open, roads: Roads, road: str) -> None:
+    dev = board("rover")
+    told: List[str] = []
+    dev.on("link_lost", lambda: told.append("lost"))
+    dev.on("link_restored", lambda: told.append("restored"))
+    emu = roads.emulator(road, "rover")
+    with dev.stream("battery", hz=10, meta=True, timeout=30) as samples:
+        it = iter(samples)
+        next(it)
+        emu.pause()  # silent for 4 heartbeat intervals (1 s): both sides call the link lost
+        try:
+            deadline = time.monotonic() + 15
+            while "lost" not in told and time.monotonic() < deadline:
+                time.sleep(0.05)
+        finally:
+            emu.resume()
+        assert told[:1] == ["lost"]
+        gaps = 0
+        for _ in range(40):  # the first sample after the outage reports it
+            gaps += next(it).gap
+            if gaps:
+                break
+        assert gaps == 1 and samples.gaps == 1
+    deadline = time.monotonic() + 10
+    while told.count("restored") < 1 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert told == ["lost", "restored"] and dev.state == "ready"

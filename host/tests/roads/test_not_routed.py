@@ -46,3 +46,16 @@ def test_async_hub_declarations_and_missions_say_they_are_not_routed(roads: Road
             with pytest.raises(hubwire.NotRoutedYet, match="missions are not routed"):
                 await dev.start("count", 3)
     run(main())
+
+
+def test_every_implementation_names_the_interface() -> None:
+    from hubwire.aio import AsyncDevice
+    from hubwire.board import BOARD_METHODS, AsyncBoardAPI, BoardAPI
+    from hubwire.service.client import AsyncRemoteDevice
+    from hubwire.service.remote import RemoteDevice
+
+    for cls, api in ((hubwire.Device, BoardAPI), (RemoteDevice, BoardAPI), (AsyncDevice, AsyncBoardAPI),
+                     (AsyncRemoteDevice, AsyncBoardAPI)):
+        assert api in cls.__mro__, cls  # so mypy checks its signatures against the interface
+        missing = [m for m in BOARD_METHODS if not hasattr(cls, m)]
+        assert not missing, (cls, missing)
