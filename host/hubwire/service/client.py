@@ -176,6 +176,7 @@ class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
         AsyncRoutedHub.__init__(self)
+        self._sessions: Any = board.get("sessions")  # the service's count of device sessions
         self._since: Optional[int] = None  # the service's last event id when this client connected
         self._delivered: Dict[str, int] = {}  # per event channel: the newest id a listener here had
         self._closed = False
@@ -218,8 +219,22 @@ class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
         was, self.board = self.board, b
         if was["state"] == "ready" and b["state"] != "ready":
             self._fire("link_lost")
+        elif b["state"] == "ready" and b.get("sessions") != self._sessions:
+            # a new device session (a reboot, a replug): its descriptor may be another one
+            self._sessions = b.get("sessions")
+            if was["state"] == "ready":
+                self._fire("link_lost")  # as a direct session that had not noticed the reboot
+            asyncio.get_running_loop().create_task(self._rediscovered())
         elif was["state"] != "ready" and b["state"] == "ready":
             self._fire("link_restored")
+
+    async def _rediscovered(self) -> None:
+        try:
+            reply = await self.conn.request("describe", board=self.key)
+            self._desc = parse_descriptor(reply["descriptor"])
+        except HubwireError:
+            return  # gone again: told by the next board message
+        self._fire("reconnect", self._desc)
 
     def _fire(self, kind: str, *args: Any) -> None:
         for cb in list(self._cbs[kind]):

@@ -257,3 +257,21 @@ def test_link_loss_is_told_and_the_stream_rides_through(board: Open, roads: Road
     while told.count("restored") < 1 and time.monotonic() < deadline:
         time.sleep(0.05)
     assert told == ["lost", "restored"] and dev.state == "ready"
+
+
+def test_a_reboot_is_told_as_reconnect_with_the_descriptor(board: Open, roads: Roads, road: str) -> None:
+    dev = board("rover")
+    told: List[Any] = []
+    dev.on("link_lost", lambda: told.append("lost"))
+    dev.on("link_restored", lambda: told.append("restored"))
+    dev.on("reconnect", lambda desc: told.append(("reconnect", desc.name)))
+    emu = roads.emulator(road, "rover")
+    emu.stop()  # the board goes away and comes back on the same port: a new device session
+    time.sleep(1.5)
+    emu.start()
+    deadline = time.monotonic() + 20
+    while len(told) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.0)  # nothing more comes
+    assert told == ["lost", ("reconnect", "rover")]
+    assert dev.state == "ready" and dev.left == 0.0  # the new boot's value
