@@ -132,8 +132,10 @@ class Connection:
             self._gone()
 
     def _gone(self) -> None:
+        # closed by this client (close()), as a direct session says, or by the service
+        why = "session closed" if self.closed else "hubwire serve went away"
         self.closed = True
-        gone = {"ok": False, "error": "LinkLost", "message": "hubwire serve went away"}
+        gone = {"ok": False, "error": "LinkLost", "message": why}
         for fut in self._pending.values():
             if not fut.done():
                 fut.set_result(gone)

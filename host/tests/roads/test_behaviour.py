@@ -275,3 +275,15 @@ def test_a_reboot_is_told_as_reconnect_with_the_descriptor(board: Open, roads: R
     time.sleep(1.0)  # nothing more comes
     assert told == ["lost", ("reconnect", "rover")]
     assert dev.state == "ready" and dev.left == 0.0  # the new boot's value
+
+
+def test_closing_ends_streams_and_event_iterators_alike(both: Callable[..., Dict[str, hubwire.Device]]) -> None:
+    devs = both("rover")
+    seen = {}
+    for road, dev in devs.items():
+        events = dev.events("bumper")
+        samples = iter(dev.stream("battery", hz=10))
+        next(samples)
+        dev.close()
+        seen[road] = (events.get(timeout=5), list(iter(events)), _outcome(lambda: [next(samples) for _ in range(100)]))
+    assert seen["direct"] == seen["routed"] == (None, [], (hubwire.LinkLost, "session closed"))
