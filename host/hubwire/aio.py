@@ -49,7 +49,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     Keyword arguments as :func:`hubwire.connect`: ``heartbeat_ms``, ``retry_timeout``, ``tries``,
     ``cache_dir``, ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``,
     ``serial_kwargs``, ``max_in_flight``, ``hub`` (hub channels; handlers may be coroutines, run on
-    this loop).
+    this loop), ``hub_later`` (declare them once connected instead).
     """
     if transport is None:
         from .service.route import RoutedConnecting  # through hubwire serve where it applies

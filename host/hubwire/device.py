@@ -32,7 +32,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``,
     ``max_in_flight``: transactions in flight at once, default 64, the rest wait their turn) and
     ``hub``: a :class:`hubwire.HubChannels` the device may use; a hub channel the device expects
-    that it lacks, or declares with another type or access, raises :class:`HubChannelError` here.
+    that it lacks, or declares with another type or access, raises :class:`HubChannelError` here,
+    also without ``hub=`` (the error names each one), unless ``hub_later=True``: the program
+    declares them on the device once connected (``dev.provide``, ``dev.accept``, ...).
 
     With ``hubwire serve`` running, a board name (``connect("rover")``), a port the service owns, or
     no URL with one board served reach the board through the service (docs/SERVICE.md).
