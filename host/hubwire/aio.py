@@ -24,6 +24,7 @@ from collections import deque
 from typing import Any, Callable, Deque, Dict, FrozenSet, Generator, List, Optional, Tuple, TypeVar, cast
 
 from . import ops, roads
+from .board import AsyncBoardAPI
 from .descriptor import Channel, Descriptor
 from .errors import HubwireError, NakError, Timeout
 from .hub_face import HubMethods
@@ -49,7 +50,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     Keyword arguments as :func:`hubwire.connect`: ``heartbeat_ms``, ``retry_timeout``, ``tries``,
     ``cache_dir``, ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``,
     ``serial_kwargs``, ``max_in_flight``, ``hub`` (hub channels; handlers may be coroutines, run on
-    this loop).
+    this loop), ``hub_later`` (declare them once connected instead).
     """
     if transport is None:
         road = roads.service_road()
@@ -94,10 +95,11 @@ class _Connecting:
             await self._dev.close()
 
 
-class AsyncDevice(HubMethods):
+class AsyncDevice(HubMethods, AsyncBoardAPI):
     """A connected device for asyncio code: ``await dev.read(name)``, ``await dev.write(name, v)``,
     ``await dev.call(name, arg)``, ``dev.stream(name, hz=...)``, ``dev.events(...)``, ``dev.on(...)``;
-    hub channels as on :class:`hubwire.Device` (``dev.provide``, ``dev.action``, ``dev.notify``...)."""
+    hub channels as on :class:`hubwire.Device` (``dev.provide``, ``dev.action``, ``dev.notify``...).
+    Implements :class:`hubwire.board.AsyncBoardAPI`, as the routed ``AsyncRemoteDevice`` does."""
 
     def __init__(self, core: SessionCore) -> None:
         self._core = core
@@ -144,6 +146,10 @@ class AsyncDevice(HubMethods):
 
     def health(self) -> LinkHealth:
         """Link health: heartbeat age, error counters of both sides, state."""
+        return self._core.health()
+
+    async def fetch_health(self) -> LinkHealth:
+        """As :meth:`health` (a direct session knows it all without asking)."""
         return self._core.health()
 
     def channel(self, name: str) -> Channel:

@@ -4,6 +4,7 @@ from __future__ import annotations
 from typing import Any, Callable, List, Optional, Tuple, cast
 
 from . import ops, roads
+from .board import BoardAPI
 from .descriptor import Channel, Descriptor
 from .diagnose import ACCESS_WORDS
 from .errors import HubwireError, NakError, Timeout
@@ -31,7 +32,9 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     ``progress``, ``on_link_lost``, ``on_link_restored``, ``on_reconnect``, ``serial_kwargs``,
     ``max_in_flight``: transactions in flight at once, default 64, the rest wait their turn) and
     ``hub``: a :class:`hubwire.HubChannels` the device may use; a hub channel the device expects
-    that it lacks, or declares with another type or access, raises :class:`HubChannelError` here.
+    that it lacks, or declares with another type or access, raises :class:`HubChannelError` here,
+    also without ``hub=`` (the error names each one), unless ``hub_later=True``: the program
+    declares them on the device once connected (``dev.provide``, ``dev.accept``, ...).
 
     With ``hubwire serve`` running, a board name (``connect("rover")``), a port the service owns, or
     no URL with one board served reach the board through the service (docs/SERVICE.md).
@@ -45,7 +48,7 @@ def connect(url: Optional[str] = None, baudrate: int = 115200, *, timeout: float
     if transport is None and road is not None:  # a board name, or a port hubwire serve owns
         remote = road.open_routed(url, timeout, kwargs)
         if remote is not None:
-            return Device(remote)
+            return cast(Device, remote)  # a RemoteDevice (hubwire.client.remote)
     if url is None and transport is None:
         url = find_port()
     session = Session(url, baudrate, connect_timeout=timeout, transport=transport, **kwargs)
@@ -78,7 +81,7 @@ def channel_table(desc: Descriptor, hub: bool = False) -> str:
     return "\n".join(lines)
 
 
-class Device(HubMethods):
+class Device(HubMethods, BoardAPI):
     """A connected device: its channels as items, and as attributes where the name is free.
 
     - ``dev["left"]`` / ``dev.left`` reads a readable channel;
@@ -92,6 +95,9 @@ class Device(HubMethods):
     - ``print(dev.table())`` shows the table of channels;
     - the other direction: ``dev.provide``, ``dev.accept``, ``dev.action``, ``dev.event`` declare
       hub channels the device may use, ``dev.notify(name, value)`` sends it a hub event.
+
+    It implements :class:`hubwire.board.BoardAPI` on both roads: over a direct session, and through
+    ``hubwire serve`` (:class:`hubwire.client.remote.RemoteDevice`).
 
     Methods and properties of this class always win: a channel called ``close``, ``read``,
     ``session``, ``name`` or ``__class__`` never hides or replaces one. Reach it with ``dev["close"]``

@@ -22,7 +22,9 @@ raises at once)::
 
 Types are written as on the device: ``"f32"``, ``"i16[3]"`` (fixed array), ``"str[16]"`` (bounded
 string), ``"struct"`` with ``fields``, or a Python type (``float`` is ``f32``, ``int`` ``i32``,
-``bool``, ``None`` void). The hub describes itself with the same JSON as a device
+``bool``, ``None`` void). A channel typed by ``int`` takes the integer type the connected device
+declares for it (``u8``, ``u16``...; :meth:`HubChannels.fit`). An action handler returning False
+refuses the call (NAK REJECTED) unless the action returns ``bool``. The hub describes itself with the same JSON as a device
 (:meth:`HubChannels.descriptor`), so every declaration is checked by the descriptor parser.
 """
 from __future__ import annotations
@@ -96,6 +98,8 @@ class HubChannel:
         # what the device may do with it, as the parsed entry says
         self.readable, self.writable = self.channel.readable, self.channel.writable
         self.callable, self.is_event = self.channel.callable, self.channel.is_event
+        #: (argument or value, return value) typed by a Python ``int``: the device's integer type fits
+        self.loose_int = (False, False)
 
     @property
     def value(self) -> Any:
@@ -183,8 +187,8 @@ class HubChannels:
                 raise HubChannelError(f"hub channel {name!r}: give type= (the function has no return annotation)")
         access = "rw" if writable or on_write is not None else "r"
         entry = self._entry(name, access, _type_obj(type, fields, name), unit, min, max, doc)
-        return self._add(HubChannel(entry, source=None if getter else source, getter=getter,
-                                    on_write=on_write))
+        return self._add(_loose(HubChannel(entry, source=None if getter else source, getter=getter,
+                                           on_write=on_write), type is int))
 
     def accept(self, name: str, on_write: Optional[Callable[[Any], Any]] = None, *, type: TypeSpec = None,
                fields: Any = None, unit: Optional[str] = None, min: Optional[float] = None,
@@ -197,7 +201,7 @@ class HubChannels:
             if spec is None or spec is inspect_missing:
                 raise HubChannelError(f"hub channel {name!r}: give type= (or annotate the handler's parameter)")
             entry = self._entry(name, "w", _type_obj(spec, fields, name), unit, min, max, doc)
-            return self._add(HubChannel(entry, source=initial, on_write=cb))
+            return self._add(_loose(HubChannel(entry, source=initial, on_write=cb), spec is int))
         if on_write is None and type is None:
             return _Decorator(declare)  # the type comes from the handler's annotation
         return declare(on_write)
@@ -206,7 +210,8 @@ class HubChannels:
                returns: TypeSpec = None, doc: Optional[str] = None) -> Any:
         """An action the device may call with one argument and a return value; the argument and
         return types come from ``type=`` / ``returns=`` or from ``fn``'s annotations (no parameter:
-        no argument; ``-> None`` or no return annotation: nothing returned). Decorator or direct."""
+        no argument; ``-> None`` or no return annotation: nothing returned); ``fn`` returning False
+        refuses the call (NAK REJECTED) unless the action returns ``bool``. Decorator or direct."""
         def declare(f: Callable[..., Any]) -> HubChannel:
             param = _first_param(f)
             arg = type if type is not None else (_hint(f, param) if param else "void")
@@ -220,13 +225,14 @@ class HubChannels:
                 entry["rt"] = rt["t"]
                 if "c" in rt:
                     entry["rc"] = rt["c"]
-            return self._add(HubChannel(entry, fn=f))
+            return self._add(_loose(HubChannel(entry, fn=f), arg is int, ret is int))
         return declare if fn is None else declare(fn)
 
     def event(self, name: str, *, type: TypeSpec, fields: Any = None, unit: Optional[str] = None,
               doc: Optional[str] = None) -> HubChannel:
         """An event the hub sends to the device with ``dev.notify(name, value)``."""
-        return self._add(HubChannel(self._entry(name, "e", _type_obj(type, fields, name), unit, None, None, doc)))
+        hc = HubChannel(self._entry(name, "e", _type_obj(type, fields, name), unit, None, None, doc))
+        return self._add(_loose(hc, type is int))
 
     def remove(self, name: str) -> None:
         """Withdraw a channel (its hub-side id is not reused)."""
@@ -244,8 +250,22 @@ class HubChannels:
                 e[k] = v
         return e
 
+    def fit(self, expected: Channel) -> None:
+        """Give a channel declared with a Python ``int`` the integer type the device declares for
+        it (``u8``, ``u16``...), so ``int`` needs no ``type=``; anything else stays as declared."""
+        with self._lock:
+            hc = self._channels.get(expected.name)
+            fitted = None if hc is None else _fitted(hc, expected)
+            if fitted is not None:
+                fitted.entry["id"] = hc.entry["id"]  # type: ignore[union-attr]
+                self._channels[expected.name] = fitted
+                self._rebuild()
+
     def _add(self, hc: HubChannel) -> HubChannel:
         with self._lock:
+            for listener in list(self._listeners):  # a connected device says which integer type
+                exp = listener.expected(hc.name) if hasattr(listener, "expected") else None
+                hc = (_fitted(hc, exp) if exp is not None else None) or hc
             old = self._channels.get(hc.name)
             hc.entry["id"] = self._ids.get(hc.name) or self._new_id()
             self._channels[hc.name] = hc
@@ -312,6 +332,32 @@ class HubChannels:
 
     def __len__(self) -> int:
         return len(self._channels)
+
+
+_INTEGERS = frozenset({"u8", "i8", "u16", "i16", "u32", "i32", "u64", "i64"})
+
+
+def _loose(hc: HubChannel, value: bool, returns: bool = False) -> HubChannel:
+    hc.loose_int = (value, returns)
+    return hc
+
+
+def _fitted(hc: HubChannel, exp: Channel) -> Optional[HubChannel]:
+    """``hc`` with the device's integer types where it was typed by ``int``, or None (no change)."""
+    entry = dict(hc.entry)
+    t, rt = exp.codec.type_obj, exp.returns.type_obj if exp.returns is not None else None
+    if hc.loose_int[0] and set(t) == {"t"} and t["t"] in _INTEGERS and entry.get("c") is None:
+        entry["t"] = t["t"]
+    if hc.loose_int[1] and rt is not None and set(rt) == {"t"} and rt["t"] in _INTEGERS:
+        entry["rt"] = rt["t"]
+    if entry == hc.entry:
+        return None
+    try:
+        new = HubChannel(entry, source=None if hc.getter else hc.value, getter=hc.getter, on_write=hc.on_write,
+                         fn=hc.fn)
+    except (HubChannelError, ValueError):
+        return None  # e.g. a value out of the device's range: the mismatch is reported as it is
+    return _loose(new, *hc.loose_int)
 
 
 class _Decorator:

@@ -4,11 +4,22 @@ from __future__ import annotations
 
 from typing import Any, Dict
 
+from .descriptor import Channel, Descriptor
+from .errors import HubChannelError
 from .hub import HubChannel, HubChannels, bind_status
 from .session.hub_channels import HubSide
 from .wire.messages import nak_name
 
-__all__ = ["HubMethods"]
+__all__ = ["HubMethods", "expected_hub_event"]
+
+
+def expected_hub_event(desc: Descriptor, name: str) -> Channel:
+    """The hub event ``name`` the device takes (access ``e`` in its ``hub`` list), else HubChannelError."""
+    exp = next((c for c in desc.hub if c.name == name and "e" in c.access), None)
+    if exp is None:
+        takes = sorted(c.name for c in desc.hub if "e" in c.access)
+        raise HubChannelError(f"{desc.name} takes no hub event {name!r}; it takes: {', '.join(takes) or 'none'}")
+    return exp
 
 
 class HubMethods:
@@ -45,8 +56,13 @@ class HubMethods:
     def notify(self, name: str, value: Any) -> None:
         """Send hub event ``name`` to the device: delivered exactly once, in order, kept across link
         losses and device reboots until the device acknowledges it. Returns at once; raises for a
-        value that does not fit or a name the device does not take as an event."""
-        self._hub_side().notify(name, value)
+        value that does not fit or a name the device does not take as an event. An event the device
+        takes that was not declared is declared with the device's own type."""
+        side = self._hub_side()
+        desc = side.core.descriptor
+        if name not in side.channels and desc is not None:
+            side.channels.event(name, type=expected_hub_event(desc, name).codec.type_obj)
+        side.notify(name, value)
 
     @property
     def notifications_pending(self) -> int:

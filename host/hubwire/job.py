@@ -11,17 +11,22 @@ import time
 from typing import Any, AsyncIterator, Callable, Iterator, Optional
 
 from . import ops
-from .errors import HubwireError, Timeout
+from .errors import NotRoutedYet, Timeout
 from .session.missions import MissionRun, start_run_number
 from .wire import messages as m
 from .wire.frame import Frame
 from .wire.missions import cancel_payload
 
-__all__ = ["Job", "AsyncJob", "start_job", "start_async_job", "NOT_ROUTED"]
+__all__ = ["Job", "AsyncJob", "start_job", "start_async_job", "NOT_ROUTED", "missions_not_routed"]
 
 #: what starting a mission through ``hubwire serve`` says
-NOT_ROUTED = ("missions are not routed through the service (hubwire serve) yet: start a mission from a program "
-              "that opens the board's port itself (stop the service for that board first)")
+def missions_not_routed() -> NotRoutedYet:
+    """The error starting a mission through ``hubwire serve`` raises."""
+    return NotRoutedYet("missions", "start a mission from a program that opens the board's port itself (stop "
+                        "the service for that board first)")
+
+
+NOT_ROUTED = str(missions_not_routed())
 
 
 def _cancelled(answer: Frame) -> bool:
@@ -117,7 +122,7 @@ def start_job(session: Any, name: str, goal: Any, timeout: Optional[float]) -> J
     """Start mission ``name`` on a synchronous session; the :class:`Job` once the run number is known."""
     ch, payload = ops.mission_start(session.descriptor, name, goal)  # a non-mission or a bad goal first
     if getattr(session, "remote", None) is not None:
-        raise HubwireError(NOT_ROUTED)
+        raise missions_not_routed()
     missions = session.core.missions
     missions.expect(ch.id)
     try:

@@ -16,8 +16,8 @@ class ServiceRoad(Protocol):
     """What the face needs of the service's client."""
 
     def open_routed(self, url: Optional[str], timeout: float, kwargs: Dict[str, Any]) -> Optional[Any]:
-        """A stand-in for a ``Session`` (under a ``Device``) when the board is reached through the
-        service, else None: open the port directly."""
+        """The board (a ``Device`` over a stand-in for its ``Session``) when it is reached through
+        the service, else None: open the port directly."""
 
     def connecting(self, url: Optional[str], baudrate: int, timeout: float, kwargs: Dict[str, Any]) -> Any:
         """What ``hubwire.aio.connect(url)`` returns: awaitable and an async context manager, through

@@ -163,4 +163,6 @@ def f32(x: float) -> bytes:
 
 
 def connect(dev: HubDevice, **kw: Any) -> hubwire.Device:
+    """The device; without ``hub=`` its hub channels are declared by the test once connected."""
+    kw.setdefault("hub_later", "hub" not in kw)
     return hubwire.connect(dev.path, timeout=5, cache_dir=False, **kw)

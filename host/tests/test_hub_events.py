@@ -109,7 +109,7 @@ def test_events_wait_for_the_bind_report_and_are_checked() -> None:
     hub = HubChannels()
     hub.event("mode", type="u8")
     with HubDevice() as dev, connect(dev) as d:
-        with pytest.raises(KeyError):
+        with pytest.raises(HubChannelError, match="thermo takes no hub event 'nosuch'; it takes: mode"):
             d.notify("nosuch", 1)
         d.provide("setpoint", 1.0)
         with pytest.raises(HubChannelError, match="not an event"):
@@ -137,7 +137,7 @@ def test_aio_coroutine_action() -> None:
 
     async def main() -> None:
         with HubDevice() as dev:
-            async with hubwire.aio.connect(dev.path, timeout=5, cache_dir=False) as d:
+            async with hubwire.aio.connect(dev.path, timeout=5, cache_dir=False, hub_later=True) as d:
                 got: List[float] = []
 
                 @d.action("dock")

@@ -19,7 +19,7 @@ LAYER_OF: Dict[str, str] = {
     "hubwire.transport": "transport", "hubwire.ports": "transport", "hubwire.diagnose": "transport",
     "hubwire.session": "session",
     "hubwire.device": "face", "hubwire.aio": "face", "hubwire.job": "face", "hubwire.ops": "face",
-    "hubwire.iterators": "face", "hubwire.hub_face": "face", "hubwire.roads": "face",
+    "hubwire.iterators": "face", "hubwire.hub_face": "face", "hubwire.roads": "face", "hubwire.board": "face",
     "hubwire": "package",
     "hubwire.client": "client",
     "hubwire.daemon": "daemon",

@@ -58,7 +58,8 @@ class CliError(Exception):
 def open_device(args: argparse.Namespace) -> Device:
     url = None if args.url in (None, "auto") else args.url
     try:
-        return connect(url, args.baud, timeout=args.timeout, progress=progress_printer(),
+        # a command does not answer the board's hub channels: it reads, writes and calls
+        return connect(url, args.baud, timeout=args.timeout, progress=progress_printer(), hub_later=True,
                        cache_dir=False if args.no_cache else None)
     except Timeout as e:
         # someone else reading the port takes the answers: say who rather than "no answer"

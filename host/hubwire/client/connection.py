@@ -14,9 +14,11 @@ import time
 from typing import Any, Callable, Dict, List, Optional
 
 from .. import ops
+from ..board import AsyncBoardAPI
 from ..descriptor import Channel, Descriptor
 from ..descriptor.parse import parse_descriptor
 from ..errors import HubwireError, LinkLost
+from .routed_hub import AsyncRoutedHub
 from ..session import LinkHealth, ReceivedEvent, StreamSample
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path
 from .streams import RemoteEvents, RemoteStream
@@ -130,8 +132,10 @@ class Connection:
             self._gone()
 
     def _gone(self) -> None:
+        # closed by this client (close()), as a direct session says, or by the service
+        why = "session closed" if self.closed else "hubwire serve went away"
         self.closed = True
-        gone = {"ok": False, "error": "LinkLost", "message": "hubwire serve went away"}
+        gone = {"ok": False, "error": "LinkLost", "message": why}
         for fut in self._pending.values():
             if not fut.done():
                 fut.set_result(gone)
@@ -154,15 +158,17 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
         reply = await conn.request("describe", board=board, timeout=timeout)
         dev = AsyncRemoteDevice(conn, reply["board"], parse_descriptor(reply["descriptor"]))
         await dev._watch()
+        await dev._mark_events()
     except BaseException:
         await conn.close()
         raise
     return dev
 
 
-class AsyncRemoteDevice:
-    """A board through ``hubwire serve``: read/write/call/stream/events/on as :class:`AsyncDevice`.
-    Closing it ends this client's subscriptions; the board stays connected to the service."""
+class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
+    """A board through ``hubwire serve``: :class:`hubwire.board.AsyncBoardAPI`, as
+    :class:`hubwire.aio.AsyncDevice` is. Closing it ends this client's subscriptions; the board stays
+    connected to the service."""
 
     def __init__(self, conn: Connection, board: Dict[str, Any], desc: Descriptor) -> None:
         self.conn = conn
@@ -171,10 +177,42 @@ class AsyncRemoteDevice:
         self._desc = desc
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
+        AsyncRoutedHub.__init__(self)
+        self._sessions: Any = board.get("sessions")  # the service's count of device sessions
+        self._since: Optional[int] = None  # the service's last event id when this client connected
+        self._delivered: Dict[str, int] = {}  # per event channel: the newest id a listener here had
+        self._closed = False
 
     async def _watch(self) -> None:
         sub, _ = await self.conn.subscribe("boards", self._board_changed, board=self.key)
         self._subs.append(sub)
+
+    async def _mark_events(self) -> None:
+        sub, reply = await self.conn.subscribe("events", lambda _m: None, board=self.key, names=[])
+        await self.conn.unsubscribe(sub)
+        last = reply.get("last")
+        self._since = last if isinstance(last, int) and not isinstance(last, bool) else None
+
+    def listen(self, names: List[str], handler: Handler) -> "tuple[int, asyncio.Future[Dict[str, Any]]]":
+        """Subscribe one listener to the events of ``names`` (all when empty), as a direct session
+        hands them: first those since this client connected that no listener here has had yet (the
+        service replays them: ``after``), then every new one. Returns the subscription and its answer."""
+        extra = {} if self._since is None else {"after": self._since}
+        answered: List["asyncio.Future[Dict[str, Any]]"] = []
+
+        def push(msg: Dict[str, Any]) -> None:
+            e = msg.get("event")
+            ch = self._desc.by_name(str(e.get("name"))) if isinstance(e, dict) else None
+            eid = e.get("id") if isinstance(e, dict) else None
+            if ch is not None and isinstance(eid, int):
+                had = self._delivered.get(ch.name, -1)
+                if not answered[0].done() and eid <= had:
+                    return  # replayed, but another listener here had it already
+                self._delivered[ch.name] = max(had, eid)
+            handler(msg)
+        sub, fut = self.conn.subscribe_nowait("events", push, board=self.key, names=names, **extra)
+        answered.append(fut)
+        return sub, fut
 
     def _board_changed(self, msg: Dict[str, Any]) -> None:
         b = msg.get("board")
@@ -183,8 +221,22 @@ class AsyncRemoteDevice:
         was, self.board = self.board, b
         if was["state"] == "ready" and b["state"] != "ready":
             self._fire("link_lost")
+        elif b["state"] == "ready" and b.get("sessions") != self._sessions:
+            # a new device session (a reboot, a replug): its descriptor may be another one
+            self._sessions = b.get("sessions")
+            if was["state"] == "ready":
+                self._fire("link_lost")  # as a direct session that had not noticed the reboot
+            asyncio.get_running_loop().create_task(self._rediscovered())
         elif was["state"] != "ready" and b["state"] == "ready":
             self._fire("link_restored")
+
+    async def _rediscovered(self) -> None:
+        try:
+            reply = await self.conn.request("describe", board=self.key)
+            self._desc = parse_descriptor(reply["descriptor"])
+        except HubwireError:
+            return  # gone again: told by the next board message
+        self._fire("reconnect", self._desc)
 
     def _fire(self, kind: str, *args: Any) -> None:
         for cb in list(self._cbs[kind]):
@@ -202,15 +254,20 @@ class AsyncRemoteDevice:
 
     @property
     def state(self) -> str:
-        """The board's state as the service sees it (``"unplugged"`` too)."""
-        return str(self.board["state"])
+        """``"ready"``, ``"connecting"``, ``"lost"`` (also while unplugged: ``board["state"]`` tells
+        the service's own word) or ``"closed"`` once this client closed it, as on a direct session."""
+        if self._closed:
+            return "closed"
+        state = str(self.board["state"])
+        return "lost" if state == "unplugged" else state
 
     @property
     def url(self) -> str:
         return f"service:{self.key}"
 
-    @property
-    def board_id(self) -> Optional[str]:
+    async def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        """The id the service knows the board by: its USB serial number when its port has one, else
+        the board's own id (as :meth:`hubwire.aio.AsyncDevice.board_id` reads it), else None."""
         bid = self.board.get("board_id")
         return None if bid is None else str(bid)
 
@@ -219,6 +276,9 @@ class AsyncRemoteDevice:
         return LinkHealth(self.state, None, None, 0, None, {}, {})
 
     async def fetch_health(self) -> LinkHealth:
+        """The link's health as the service measures it (once closed: :meth:`health`, as direct)."""
+        if self._closed:
+            return self.health()
         h = (await self.conn.request("health", board=self.key))["health"]
         return LinkHealth(**h) if h else self.health()
 
@@ -251,16 +311,16 @@ class AsyncRemoteDevice:
 
     async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
         """Missions are not routed through the service: a clear error (after checking the name)."""
-        from ..job import NOT_ROUTED
+        from ..job import missions_not_routed
 
         ops.mission_start(self._desc, name, goal)  # a non-mission or a bad goal says so first
-        raise HubwireError(NOT_ROUTED)
+        raise missions_not_routed()
 
     def sample(self, ch: Channel, s: Dict[str, Any]) -> StreamSample:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),
                             int(s["lost"]), time.monotonic(), int(s["gap"]))
 
-    def event(self, e: Dict[str, Any]) -> ReceivedEvent:
+    def decode_event(self, e: Dict[str, Any]) -> ReceivedEvent:
         ch = self.channel(e["name"])
         return ReceivedEvent(ch.name, ch.codec.decode(bytes.fromhex(e["raw"])), int(e["seq"]), time.monotonic(), ch.id)
 
@@ -285,11 +345,11 @@ class AsyncRemoteDevice:
 
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                ev = self.event(msg["event"])
+                ev = self.decode_event(msg["event"])
                 res = callback(ev if key is None else ev.value)
                 if asyncio.iscoroutine(res):
                     asyncio.get_running_loop().create_task(res)
-        sub, fut = self.conn.subscribe_nowait("events", handler, board=self.key, names=[] if key is None else [key])
+        sub, fut = self.listen([] if key is None else [key], handler)
         self._subs.append(sub)
         fut.add_done_callback(lambda f: None if f.result().get("ok") else self.conn._subs.pop(sub, None))
         def remove() -> None:
@@ -297,6 +357,7 @@ class AsyncRemoteDevice:
         return remove
 
     async def close(self) -> None:
+        self._closed = True
         await self.conn.close()
 
     async def __aenter__(self) -> "AsyncRemoteDevice":

@@ -97,7 +97,7 @@ def jsonable(v: Any) -> Any:
 
 def board_json(b: Any) -> Dict[str, Any]:
     return {"key": b.key, "name": b.name, "board_id": b.board_id, "port": b.port, "state": b.state,
-            "attached": b.attached}
+            "attached": b.attached, "sessions": b.sessions}
 
 
 def error_json(exc: BaseException) -> Dict[str, Any]:

@@ -1,6 +1,8 @@
 """The synchronous face of a board through the service: :class:`RemoteSession` stands in for
-:class:`hubwire.session.Session` under an ordinary :class:`hubwire.Device`, so ``hubwire.connect("rover")``
-gives the same object with the same methods, attributes, streams and events as a direct connection.
+:class:`hubwire.session.Session` under a :class:`RemoteDevice` (a :class:`hubwire.Device`), so
+``hubwire.connect("rover")`` gives the same methods, attributes, streams and events as a direct
+connection (:class:`hubwire.board.BoardAPI`); what needs the board's own session (hub channels a
+client declares, missions) raises :class:`hubwire.NotRoutedYet`.
 
 It runs an :class:`AsyncRemoteDevice` on the process's shared hub loop; callbacks run on a
 dispatcher thread of their own, as a direct session's do.
@@ -10,7 +12,10 @@ from __future__ import annotations
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from ..descriptor import Channel, Descriptor
+from ..device import Device
 from ..errors import HubwireError
+from ..hub import HubChannels
+from .routed_hub import hub_event_payload, hub_not_routed
 from ..session import LinkHealth, State, Stats, StreamSample, ThreadSubscription
 from ..session.events import QueueSink
 from ..session.runner import ThreadDispatcher, release_loop, run_sync
@@ -19,10 +24,10 @@ from ..wire.frame import Frame
 from .connection import AsyncRemoteDevice
 from .streams import ended
 
-__all__ = ["RemoteSession"]
+__all__ = ["RemoteSession", "RemoteDevice"]
 
 _ident = id  # (``id`` is a channel id in the methods below)
-_STATES = {"ready": State.READY, "connecting": State.CONNECTING, "lost": State.LOST, "unplugged": State.LOST}
+_STATES = {"ready": State.READY, "connecting": State.CONNECTING, "lost": State.LOST, "closed": State.CLOSED}
 
 
 class RemoteSession:
@@ -58,7 +63,17 @@ class RemoteSession:
         return run_sync(self._loop, aw)
 
     def health(self) -> LinkHealth:
+        if self._loop is None:  # closed: what a closed direct session reports, without asking
+            return LinkHealth("closed", None, None, 0, None, {}, {})
         return self._run(self.remote.fetch_health())  # type: ignore[no-any-return]
+
+    def board_id(self, timeout: Optional[float] = None) -> Optional[str]:
+        return self._run(self.remote.board_id(timeout=timeout))  # type: ignore[no-any-return]
+
+    def notify(self, name: str, value: Any) -> None:
+        """Hub event ``name``, checked here and handed to the service; returns once it is stored."""
+        raw = hub_event_payload(self.remote.descriptor, name, value)
+        self._run(self.remote.conn.request("notify", board=self.remote.key, channel=name, raw=raw.hex()))
 
     def _channel(self, id: int) -> Channel:
         ch = self.remote.descriptor.by_id(id)
@@ -107,7 +122,8 @@ class RemoteSession:
 
     def _events(self, names: Optional[List[str]], handler: Callable[[Dict[str, Any]], None]) -> int:
         async def start() -> int:
-            sub, _ = await self.remote.conn.subscribe("events", handler, board=self.remote.key, names=names or [])
+            sub, fut = self.remote.listen(names or [], handler)
+            await self.remote.conn.confirm(sub, fut)
             return sub
         return self._run(start())  # type: ignore[no-any-return]
 
@@ -116,7 +132,7 @@ class RemoteSession:
 
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                sink.put(self.remote.event(msg["event"]))
+                sink.put(self.remote.decode_event(msg["event"]))
             elif "end" in msg:
                 sink.close()
         self._subs[_ident(sink)] = self._events(sorted(names) if names else None, handler)
@@ -128,7 +144,7 @@ class RemoteSession:
     def add_event_callback(self, name: Optional[str], cb: Callable[[Any], Any]) -> None:
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                ev = self.remote.event(msg["event"])
+                ev = self.remote.decode_event(msg["event"])
                 self._dispatcher(cb, ev if name is None else ev.value)
         self._cbs.append((name, cb, self._events(None if name is None else [name], handler)))
 
@@ -179,3 +195,39 @@ class RemoteSession:
     def __exit__(self, *exc: Any) -> None:
         self.close()
 
+
+
+class RemoteDevice(Device):
+    """:class:`hubwire.Device` through ``hubwire serve`` (``hubwire.connect("rover")``): the same
+    :class:`hubwire.board.BoardAPI`; the hub-channel methods go through the service where it can."""
+
+    __slots__ = ()
+    _session: Any  # a RemoteSession
+
+    def _hub_side(self) -> Any:
+        raise hub_not_routed()
+
+    @property
+    def hub(self) -> HubChannels:
+        """Empty: hub channels a client declares are not routed yet (declaring raises NotRoutedYet)."""
+        return self._session.remote.hub  # type: ignore[no-any-return]
+
+    def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        """The id the service knows the board by (its USB serial number, else its own id, else None)."""
+        return self._session.board_id(timeout)  # type: ignore[no-any-return]
+
+    def notify(self, name: str, value: Any) -> None:
+        """Send hub event ``name``: checked here, then stored by the service when this returns; the
+        service delivers it exactly once, in order, also across its own restart."""
+        self._session.notify(name, value)
+
+    def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Returns at once: every :meth:`notify` returned once the service had stored its event."""
+
+    @property
+    def notifications_pending(self) -> int:
+        """0: the service holds every hub event once :meth:`notify` returned."""
+        return 0
+
+    def hub_binding(self) -> Dict[str, str]:
+        raise hub_not_routed()

@@ -5,7 +5,7 @@ anything else opens the port directly, as without a service. ``HUBWIRE_NO_SERVIC
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, cast
 
 from ..aio import _Connecting
 from ..errors import HubwireError, NoDeviceFound, UnknownBoard
@@ -69,9 +69,10 @@ def _direct_for_hub_channels(url: Optional[str], kwargs: Dict[str, Any]) -> bool
 
 
 def open_routed(url: Optional[str], timeout: float, kwargs: Dict[str, Any]) -> Any:
-    """A :class:`RemoteSession` when the board is reached through the service, else None."""
+    """A :class:`RemoteDevice` (over a :class:`RemoteSession`) when the board is reached through the
+    service, else None."""
     from ..session.runner import acquire_loop, release_loop, run_sync
-    from .remote import RemoteSession
+    from .remote import RemoteDevice, RemoteSession
 
     if _direct_for_hub_channels(url, kwargs):
         return None
@@ -90,7 +91,7 @@ def open_routed(url: Optional[str], timeout: float, kwargs: Dict[str, Any]) -> A
     for name in _CALLBACKS:
         if kwargs.get(name) is not None:
             session._add(name[3:], kwargs[name])
-    return session
+    return RemoteDevice(cast(Any, session))  # a Device over the stand-in for its Session
 
 
 class RoutedConnecting(_Connecting):

@@ -97,17 +97,18 @@ class RemoteStream:
 
 
 class RemoteEvents(EventIterator):
-    """``async for ev in dev.events(...)`` through the service: every event from its creation on."""
+    """``async for ev in dev.events(...)`` through the service: every event from its creation on, the
+    ones since the device was connected that no listener had first (:meth:`AsyncRemoteDevice.listen`)."""
 
     def __init__(self, dev: AsyncRemoteDevice, names: List[str], timeout: Optional[float]) -> None:
         self.dev, self.timeout = dev, timeout
         self._q = _Queue(4096)
         self._fut: "Optional[asyncio.Future[Dict[str, Any]]]"
-        self._sub, self._fut = dev.conn.subscribe_nowait("events", self._push, board=dev.key, names=names)
+        self._sub, self._fut = dev.listen(names, self._push)
 
     def _push(self, msg: Dict[str, Any]) -> None:
         if "event" in msg:
-            self._q.q.append(self.dev.event(msg["event"]))
+            self._q.q.append(self.dev.decode_event(msg["event"]))
         elif "end" in msg:
             self._q.end = _Closed()
         self._q.ready.set()

@@ -57,6 +57,9 @@ class Board:
     last_port: Optional[str] = None
     #: events the service received from it (each one is handed to every client listening then)
     events: int = 0
+    #: device sessions the service has seen (+1 per attach and per reboot): clients tell a reboot
+    #: (``reconnect``) from a link restored by it
+    sessions: int = 0
 
 
 class Changes:
@@ -295,7 +298,9 @@ class Fleet:
             if self._resumable is None:
                 self._resumable = set(self.store.hub_session_ports()) if self.store is not None else set()
             hs = durable.hub_session(self.store, info.path, info.path in self._resumable)
+            # the service offers the board's hub events itself (durable.offer_hub_events)
             dev = await connect(transport=SerialTransport(info.path, self.baudrate), timeout=self.connect_timeout,
+                                hub_later=True,
                                 cache_dir=self.cache_dir, hub_session=hs)
             self._resumable.discard(info.path)
         except asyncio.CancelledError:
@@ -327,6 +332,7 @@ class Fleet:
         board.port = board.last_port = info.path
         board.device = dev
         board.attached += 1
+        board.sessions += 1
         board.state = dev.state
         self._descriptors[board.key] = dev.descriptor
         self._by_port[real] = board
@@ -335,7 +341,7 @@ class Fleet:
         # the service always listens, so an event nobody else hears is counted (and kept by the store)
         dev.on("*", lambda _ev, b=board: setattr(b, "events", b.events + 1))
         for kind in ("link_lost", "link_restored", "reconnect"):
-            dev.on(kind, lambda *_a, b=board, d=dev, r=real: self._device_changed(b, d, r))
+            dev.on(kind, lambda *_a, b=board, d=dev, r=real, k=kind: self._device_changed(b, d, r, k))
         # name and id as repr: a device's strings never reach the log as raw text
         log.info("hubwire serve: %s (name %r, board id %r) on %s", board.key, name, board_id, info.path)
         self._emit(board)
@@ -355,9 +361,11 @@ class Fleet:
         self._boards[key] = board
         return board
 
-    def _device_changed(self, board: Board, dev: AsyncDevice, real: str) -> None:
+    def _device_changed(self, board: Board, dev: AsyncDevice, real: str, kind: str = "") -> None:
         if board.device is not dev:
             return
+        if kind == "reconnect":  # the device rebooted: a new device session, rediscovered
+            board.sessions += 1
         d = dev.core.descriptor
         if d is not None and d.name != board.name:
             # new firmware with another name on the same port: another board now
@@ -365,10 +373,11 @@ class Fleet:
             return
         if d is not None:
             self._descriptors[board.key] = d
-        self._refresh(board)
+        self._refresh(board, kind == "reconnect")
 
-    def _refresh(self, board: Board) -> None:
-        if board.device is not None and board.device.state != board.state:
+    def _refresh(self, board: Board, changed: bool = False) -> None:
+        """Emit the board when its state changed (or ``changed``: a new device session)."""
+        if board.device is not None and (changed or board.device.state != board.state):
             board.state = board.device.state
             self._emit(board)
 

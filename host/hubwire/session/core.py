@@ -51,7 +51,8 @@ class SessionCore:
     def __init__(self, transport: Transport, *, dispatch: Any, connect_timeout: float = 5.0,
                  heartbeat_ms: int = 250, retry_timeout: float = 0.1, tries: int = 5, cache_dir: Any = None,
                  progress: Optional[Callable[[int, int], None]] = None, hub: Optional[HubChannels] = None,
-                 max_in_flight: int = DEFAULT_MAX_IN_FLIGHT, hub_session: Optional[HubSession] = None) -> None:
+                 max_in_flight: int = DEFAULT_MAX_IN_FLIGHT, hub_session: Optional[HubSession] = None,
+                 hub_later: bool = False) -> None:
         self.loop = asyncio.get_running_loop()
         self._loop_thread = threading.current_thread()
         self.url = transport.url
@@ -78,6 +79,8 @@ class SessionCore:
         self.reconnect_cbs: List[Callable[[Descriptor], Any]] = []
         #: the hub's own channels for this device (declared beforehand: ``hub_declared``)
         self.hub_declared = hub is not None
+        #: the caller declares the hub channels after connecting: open() does not ask for them
+        self.hub_later = hub_later
         self.hub = HubSide(self, hub if hub is not None else HubChannels())
         # hub_session: the nonce to say hello with, and what a resumed session left (session/resume.py)
         self.link = Link(transport, self.loop, self.stats, heartbeat_ms, self,
@@ -204,7 +207,7 @@ class SessionCore:
             await self._changes(min(0.5, self.connect_timeout - idle))
         if self.fatal is not None:
             raise self.fatal
-        if self.hub_declared and self.descriptor is not None:
+        if self.descriptor is not None and not self.hub_later:
             self.hub.check_all(self.descriptor)  # a name the device uses and the hub lacks
 
     async def close(self) -> None:

@@ -36,7 +36,8 @@ class Session:
     ``cache_dir`` (descriptor cache directory, ``None`` default, ``False`` disables), ``progress``
     (``callable(received, total)`` during descriptor downloads), ``on_link_lost`` /
     ``on_link_restored`` / ``on_reconnect`` callbacks, ``serial_kwargs`` (to ``serial_for_url``),
-    ``hub`` (the :class:`hubwire.HubChannels` offered to the device), ``max_in_flight`` (transactions
+    ``hub`` (the :class:`hubwire.HubChannels` offered to the device), ``hub_later`` (True: the
+    hub channels the device expects are declared after connecting, not checked by ``open()``), ``max_in_flight`` (transactions
     in flight at once, 1..200, default 64: more wait their turn, asleep, in the order they came).
     """
 
@@ -47,7 +48,8 @@ class Session:
                  on_link_restored: Optional[Callable[[], None]] = None,
                  on_reconnect: Optional[Callable[[Descriptor], None]] = None,
                  serial_kwargs: Optional[Dict[str, Any]] = None, transport: Optional[Transport] = None,
-                 hub: Optional[HubChannels] = None, max_in_flight: int = DEFAULT_MAX_IN_FLIGHT) -> None:
+                 hub: Optional[HubChannels] = None, max_in_flight: int = DEFAULT_MAX_IN_FLIGHT,
+                 hub_later: bool = False) -> None:
         if transport is None:
             if url is None:
                 raise ValueError("Session needs a url or a transport")
@@ -56,7 +58,7 @@ class Session:
         self.url = transport.url
         self._options = dict(connect_timeout=connect_timeout, heartbeat_ms=heartbeat_ms, retry_timeout=retry_timeout,
                              tries=tries, cache_dir=cache_dir, progress=progress, hub=hub,
-                             max_in_flight=max_in_flight)
+                             max_in_flight=max_in_flight, hub_later=hub_later)
         self._initial_cbs = (on_link_lost, on_link_restored, on_reconnect)
         self._core: Optional[SessionCore] = None
         self._loop: Any = None

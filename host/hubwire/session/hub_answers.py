@@ -128,7 +128,13 @@ class HubAnswers:
         returns = hc.channel.returns
         assert hc.fn is not None and returns is not None
         args = () if hc.channel.codec.kind == "void" else (arg,)
-        self._run(f, hc.fn, args, lambda v, e: self._answer_value(f, hc, returns, v, e, ack_void=True))
+
+        def done(result: Any, epoch: int) -> None:
+            if result is False and returns.type_obj.get("t") != "bool":  # refused, as a write handler may
+                self._reply(f, m.NAK, bytes((NakCode.REJECTED,)), epoch)
+            else:
+                self._answer_value(f, hc, returns, result, epoch, ack_void=True)
+        self._run(f, hc.fn, args, done)
 
     def _argument(self, f: Frame, exp: Channel, hc: HubChannel, allowed: bool) -> Any:
         """The checked value of a device C (PROTOCOL.md §5 order), or _REFUSED after a NAK."""

@@ -104,13 +104,21 @@ class HubSide:
                         raise HubChannelError(mismatch(exp, hc, code, desc.name))
         self.loop.call_soon_threadsafe(self.rebind)
 
+    def expected(self, name: str) -> Optional[Channel]:
+        """The hub channel ``name`` as the connected device declares it (None: unknown yet, or none)."""
+        desc = self.core.descriptor
+        return None if desc is None else next((c for c in desc.hub if c.name == name), None)
+
     def check_all(self, desc: Descriptor) -> None:
         """Raise HubChannelError naming every hub channel the device uses that the hub lacks or
-        declares otherwise (connect() with channels declared beforehand)."""
+        declares otherwise (connect() with channels declared beforehand; those typed by a Python
+        ``int`` take the device's integer type first)."""
+        for exp in desc.hub:
+            self.channels.fit(exp)
         bad = [mismatch(exp, self.channels.get(exp.name), code, desc.name)
                for exp in desc.hub for code in (bind_status(exp, self.channels.get(exp.name)),) if code]
         if bad:
-            raise HubChannelError("; ".join(bad))
+            raise HubChannelError("; ".join(bad) + HOW_TO_PROVIDE)
 
     def rebind(self) -> None:
         self._bind_wanted = True
@@ -380,6 +388,12 @@ class HubSide:
     def _done(self, ev: _Queued, acked: bool = False) -> None:
         if self.keeper is not None and ev.token is not None:
             self.keeper.done(ev.token, ev.seq if acked else None)
+
+
+#: what a connect() missing hub channels says to do
+HOW_TO_PROVIDE = (". Declare them on a hubwire.HubChannels given to connect(..., hub=hub) (hub.provide, hub.accept, "
+                  "hub.action, hub.event), or pass connect(..., hub_later=True) and declare them on the device "
+                  "once connected (dev.provide, dev.accept, dev.action, dev.event)")
 
 
 def mismatch(exp: Channel, hc: Optional[HubChannel], code: int, device: str) -> str:

@@ -31,7 +31,8 @@ def soak_link(tmp_path: Any) -> Iterator[Tuple[Any, FaultLink]]:
         pytest.fail(f"soak emulator not found at {binary}: build it with `make emulator`", pytrace=False)
     emu = start_emulator(binary, str(tmp_path / "dev"))
     fl = FaultLink(str(tmp_path / "dev"), str(tmp_path / "hub"), seed=9).start()
-    dev = hubwire.connect(str(tmp_path / "hub"), cache_dir=False, timeout=10, heartbeat_ms=HUB_HEARTBEAT_MS)
+    dev = hubwire.connect(str(tmp_path / "hub"), cache_dir=False, timeout=10, heartbeat_ms=HUB_HEARTBEAT_MS,
+                          hub_later=True)
     try:
         yield dev, fl
     finally:
@@ -76,7 +77,7 @@ def test_a_device_whose_heartbeats_vanish_is_probed_and_its_answers_keep_the_lin
     emu = start_emulator(binary, str(tmp_path / "dev"))
     tap = tapped(str(tmp_path / "dev"))
     try:
-        with hubwire.connect(transport=tap, cache_dir=False, timeout=10) as dev:
+        with hubwire.connect(transport=tap, cache_dir=False, timeout=10, hub_later=True) as dev:
             link = dev.session.core.link
             beat = link.device_hello.heartbeat_ms / 1000
             lost: List[float] = []

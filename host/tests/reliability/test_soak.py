@@ -68,7 +68,7 @@ def test_connect_and_discover_through_a_lossy_link(emu: Any) -> None:
     for _ in range(4):
         t = time.monotonic()
         try:
-            with hubwire.connect(transport=fl, cache_dir=False, timeout=15) as dev:
+            with hubwire.connect(transport=fl, cache_dir=False, timeout=15, hub_later=True) as dev:
                 assert dev.battery > 0
         except hubwire.HubwireError as e:
             failures.append(f"{type(e).__name__} after {time.monotonic() - t:.1f} s: {e}")

@@ -76,7 +76,7 @@ _CONCURRENT = textwrap.dedent("""
     binary, link, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
     emu = start_emulator(binary, link)
     try:
-        with hubwire.connect(link, cache_dir=False, timeout=10, retry_timeout=0.5, tries=40) as dev:
+        with hubwire.connect(link, cache_dir=False, timeout=10, retry_timeout=0.5, tries=40, hub_later=True) as dev:
             tx = dev.session.core.tx
             hold = threading.Event()
             hold.set()
@@ -151,7 +151,7 @@ def test_asyncio_reads_beyond_max_in_flight_wait_their_turn(tmp_path: Any) -> No
     emu = start_emulator(_binary(), link)
 
     async def main() -> Any:
-        async with hubwire.aio.connect(link, cache_dir=False, timeout=10, max_in_flight=4) as dev:
+        async with hubwire.aio.connect(link, cache_dir=False, timeout=10, max_in_flight=4, hub_later=True) as dev:
             tx = dev._core.tx
             peak = 0
             register = tx.try_register

@@ -40,7 +40,7 @@ async def until(pred: Any, timeout: float, what: str) -> None:
 def test_event_stored_but_not_acked_is_stored_once(soak: Emulator, tmp_path: Any) -> None:
     async def run() -> None:
         store = Store(str(tmp_path / "state"))
-        dev = await connect(transport=SerialTransport(soak.link), timeout=10)
+        dev = await connect(transport=SerialTransport(soak.link), timeout=10, hub_later=True)
         durable.attach(store, "soak", dev)
         bumper = dev.channel("bumper").id
         send = dev.core.link.send_frame
@@ -52,7 +52,7 @@ def test_event_stored_but_not_acked_is_stored_once(soak: Emulator, tmp_path: Any
         assert await dev.call("selftest", 1) == 1
         await until(lambda: store.last_id("soak") == 1, 10, "event stored")
         await dev.close()
-        dev = await connect(transport=SerialTransport(soak.link), timeout=10)  # the next service
+        dev = await connect(transport=SerialTransport(soak.link), timeout=10, hub_later=True)  # the next service
         durable.attach(store, "soak", dev)
         await until(lambda: dev.core.stats.events >= 1, 10, "the device's retry")
         assert await dev.call("selftest", 1) == 1  # a new event after it is stored
@@ -71,7 +71,7 @@ def test_hub_events_kept_by_one_session_are_sent_by_the_next(soak: Emulator, tmp
         store = Store(str(tmp_path / "state"))
         for t in (1, 2, 3):  # kept by a service that stopped before the board was attached
             store.hub_add("soak", "tick", t.to_bytes(4, "little"))
-        dev = await connect(transport=SerialTransport(soak.link), timeout=10)
+        dev = await connect(transport=SerialTransport(soak.link), timeout=10, hub_later=True)
         durable.attach(store, "soak", dev)
         dev.notify("tick", 4)  # after the kept ones
         await dev.wait_notified(timeout=10)
@@ -87,7 +87,7 @@ def test_event_is_stored_before_it_is_acknowledged(soak: Emulator, tmp_path: Any
     """The ACK tells the device the event is delivered: the store has it by then."""
     async def run() -> None:
         store = Store(str(tmp_path / "state"))
-        dev = await connect(transport=SerialTransport(soak.link), timeout=10)
+        dev = await connect(transport=SerialTransport(soak.link), timeout=10, hub_later=True)
         order = []
         send = dev.core.link.send_frame
         bumper = dev.channel("bumper").id
@@ -121,7 +121,7 @@ def test_events_waiting_on_the_board_when_the_service_starts_are_stored(soak: Em
     monkeypatch.setattr(AsyncDevice, "board_id", slow_board_id)
 
     async def run() -> None:
-        dev = await connect(transport=SerialTransport(soak.link), timeout=10)
+        dev = await connect(transport=SerialTransport(soak.link), timeout=10, hub_later=True)
         send = dev.core.link.send_frame
         bumper = dev.channel("bumper").id
         dev.core.link.send_frame = (  # type: ignore[method-assign]
@@ -154,7 +154,7 @@ def test_hub_event_in_flight_when_the_service_stops(soak: Emulator, tmp_path: An
         port = soak.link
         hs = durable.hub_session(store, port, resume=True)
         assert hs is not None and not hs.resumed, "nothing kept yet: a new hub session"
-        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_later=True, hub_session=hs)
         assert dev.core.link.nonce == hs.nonce
         durable.attach(store, "soak", dev, port)
         tick = next(c.id for c in dev.descriptor.hub if c.name == "tick")
@@ -169,7 +169,7 @@ def test_hub_event_in_flight_when_the_service_stops(soak: Emulator, tmp_path: An
 
         hs = durable.hub_session(store, port, resume=resume)  # the restarted service
         assert hs is not None and hs.resumed == resume and (hs.nonce == kept.nonce) == resume
-        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_later=True, hub_session=hs)
         durable.attach(store, "soak", dev, port)
         await dev.wait_notified(timeout=10)
         dev.notify("tick", 2)  # a new event after it: never taken for the device's memory
@@ -199,7 +199,7 @@ def test_hub_event_waits_while_its_seq_cannot_be_kept(soak: Emulator, tmp_path: 
         store = Store(str(tmp_path / "state"))
         port = soak.link
         hs = durable.hub_session(store, port, resume=True)
-        dev = await connect(transport=SerialTransport(port), timeout=10, hub_session=hs)
+        dev = await connect(transport=SerialTransport(port), timeout=10, hub_later=True, hub_session=hs)
         durable.attach(store, "soak", dev, port)
         fails = []
         hub_sent = store.hub_sent

@@ -110,6 +110,7 @@ def test_unplug_and_replug_on_a_new_port(serve: Serve, emulators: Callable[[str]
         restored: list = []
         rover.on("link_lost", lambda: lost.append(1))
         rover.on("link_restored", lambda: restored.append(1))
+        rover.on("reconnect", lambda desc: restored.append(desc.name))  # a new device session
         samples = rover.stream("left", hz=20, meta=True)
         assert samples.get(10) is not None
         first.stop()  # unplugged ...
@@ -124,7 +125,7 @@ def test_unplug_and_replug_on_a_new_port(serve: Serve, emulators: Callable[[str]
         assert rover.left == 0.0  # the same client object reaches the board on its new port
         rover.left = 0.75
         assert rover.left == 0.75
-        wait_for(lambda: (len(lost), len(restored)) == (1, 1), what="link lost and restored, once each")
+        wait_for(lambda: (lost, restored) == ([1], ["rover"]), what="link lost, then reconnect, once each")
         s = samples.get(10)  # the stream rode through, its first sample marked with the outage
         while s is not None and s.value != 0.75 and s.gap == 0:
             s = samples.get(10)

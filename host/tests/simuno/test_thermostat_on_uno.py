@@ -85,7 +85,7 @@ def test_thermostat_connect_raises_for_a_missing_hub_channel(examples: Examples)
 
 
 def test_thermostat_sees_a_refused_report(examples: Examples) -> None:
-    dev = examples.start("Thermostat")
+    dev = examples.start("Thermostat", hub_later=True)  # declared below, once connected
     dev.provide("setpoint", 21.5)
     dev.accept("report", lambda v: False, type="u16")  # every report refused: REJECTED
     dev.action("alarm", lambda t: True, type="f32", returns="bool")
