@@ -12,7 +12,7 @@ from ..wire.messages import NakCode
 from .mission_runs import RunEntry, check_run_id, runs_of
 from .protocol import Usage, error_json
 
-__all__ = ["start", "follow", "cancel", "runs", "run_json", "outcome_json", "progress_json"]
+__all__ = ["start", "follow", "cancel", "runs", "run_json", "outcome_json", "progress_json", "wait_change"]
 
 
 def run_json(e: RunEntry) -> Dict[str, Any]:
@@ -106,11 +106,12 @@ async def _push(client: Any, sub: Any, e: RunEntry, index: int) -> None:
                 status = rec.status
                 client.send({"sub": sub, "status": status})
             if rec.received <= index and not rec.done:
-                await _change(rec)
+                await wait_change(rec)
     client.send({"sub": sub, "result": outcome_json(e)})  # the last: the subscription ends with it
 
 
-async def _change(rec: Any) -> None:
+async def wait_change(rec: Any) -> None:
+    """Until the run ``rec`` changes (a progress value, a status, the end)."""
     fut: "asyncio.Future[None]" = asyncio.get_running_loop().create_future()
 
     def wake() -> None:

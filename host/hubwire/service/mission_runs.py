@@ -15,7 +15,7 @@ import secrets
 import weakref
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from ..errors import HubwireError, LinkLost, Timeout
 from .protocol import Busy, Usage
@@ -69,6 +69,9 @@ class MissionRuns:
         self.limit = limit
         self._runs: "OrderedDict[str, RunEntry]" = OrderedDict()
         self._starting: Dict[str, "asyncio.Future[RunEntry]"] = {}
+        #: called with each new entry (a run started or refused) on the loop: the MQTT bridge and
+        #: the dashboard follow runs whoever started them
+        self.listeners: List[Callable[[RunEntry], None]] = []
 
     def get(self, run_id: Any) -> RunEntry:
         e = self._runs.get(check_run_id(run_id))
@@ -123,6 +126,8 @@ class MissionRuns:
                 entry.refused = e
             self._runs[run_id] = entry
             fut.set_result(entry)
+            for cb in list(self.listeners):
+                cb(entry)
             return entry
         except BaseException as e:
             fut.set_exception(e)
