@@ -112,12 +112,20 @@ class RunFeed:
 async def follow_run(dev: "AsyncRemoteDevice", run_id: str, dispatch: Dispatch = _on_loop) -> "tuple[MissionRun, str]":
     """Follow the service's run ``run_id`` from its first progress value: the local record of it."""
     feed = RunFeed(dev, dispatch)
-    sub, fut = dev.conn.subscribe_nowait("mission", feed.push, run_id=run_id)
+
+    def push(msg: Dict[str, Any]) -> None:
+        feed.push(msg)
+        if "result" in msg:  # the service ended the subscription with it: forget it here too
+            dev.conn._subs.pop(sub, None)
+            if sub in dev._subs:
+                dev._subs.remove(sub)
+    sub, fut = dev.conn.subscribe_nowait("mission", push, run_id=run_id)
     msg = await fut
     if not msg.get("ok"):
         dev.conn._subs.pop(sub, None)
         raise_error(msg)
-    dev._subs.append(sub)
+    if sub in dev.conn._subs:
+        dev._subs.append(sub)
     return feed.begin(msg["run"]), str(msg["run"]["run_id"])
 
 
