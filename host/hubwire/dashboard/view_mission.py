@@ -8,7 +8,7 @@ and a start here is followed by MQTT and socket clients the same way.
 
 Elements carry ``data-hw-*`` attributes with ``<board key>.<mission>``: ``goal``, ``start``,
 ``cancel``, ``progress`` (its ``data-hw-fraction`` 0..1), ``progress-value``, ``run`` (status
-text, ``data-hw-status``), ``mission-result`` and ``mission-error``.
+text, ``data-hw-run-status``), ``mission-result`` and ``mission-error``.
 """
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ class MissionView:
                 self.cancel.disable()
             self.bar = tag(ui.linear_progress(value=0.0, show_value=False).classes("w-full"), progress=a, fraction=0)
             with ui.row().classes("items-baseline gap-3 text-sm"):
-                self.status = tag(ui.label("no run yet").classes("text-gray-600"), run=a, status="")
+                self.status = tag(ui.label("no run yet").classes("text-gray-600"), run=a, run_status="")
                 self.value = tag(ui.label("").classes("font-mono"), progress_value=a)
                 self.result = tag(ui.label("").classes("font-mono"), mission_result=a)
             self.error = tag(ui.label("").classes("text-xs text-red-700"), mission_error=a)
@@ -118,7 +118,7 @@ class MissionView:
         self._shown = now
         last = rec.progress[-1] if rec.progress else None
         self.status.set_text(f"run {rec.run} ({e.run_id}): {rec.status}")
-        tag(self.status, status=rec.status)
+        tag(self.status, run_status=rec.status)
         self.value.set_text("" if last is None else fmt_value(last) + self.unit)
         pmax = self.ch.progress_max
         frac = 0.0

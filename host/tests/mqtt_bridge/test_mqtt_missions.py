@@ -1,6 +1,6 @@
 """Missions on MQTT as a Node-RED flow or a Home Assistant automation would use them
-(docs/MQTT.md "Missions"): `hubwire serve --mqtt` with the missions emulator (examples/Missions),
-a private mosquitto, and mosquitto_pub / mosquitto_sub. A goal in, progress in order and the result
+(docs/MQTT.md "Missions"): `hubwire serve --mqtt` with examples/Missions on the missions emulator
+and on the simulated Uno (real AVR firmware in simavr), a private mosquitto, and mosquitto_pub / mosquitto_sub. A goal in, progress in order and the result
 once per run id out, a repeated start that starts nothing, BUSY as a refused result, a cancel, and
 malformed run ids and payloads refused before anything reaches the board."""
 from __future__ import annotations
@@ -15,6 +15,7 @@ import pytest
 
 from conftest import Emulator
 from service.conftest import HOST, Serve, wait_for
+from simuno.conftest import Simuno, example_elf, simuno_binary
 
 from .conftest import Broker
 
@@ -23,15 +24,22 @@ DEADLINE = 60.0
 BASE = "hubwire/missions/mission/drive"
 
 
-@pytest.fixture
-def served(broker: Broker, tmp_path: Any) -> Iterator[Tuple[Serve, Broker, Any]]:
+@pytest.fixture(params=["emulator", "uno"])
+def served(request: pytest.FixtureRequest, broker: Broker, tmp_path: Any) -> Iterator[Tuple[Serve, Broker, Any]]:
     if shutil.which("mosquitto_sub") is None:
         pytest.fail("mosquitto_sub missing: run tools/setup.sh (apt-get install mosquitto-clients)", pytrace=False)
-    if not os.access(MISSIONS_EMULATOR, os.X_OK):
-        pytest.fail(f"{MISSIONS_EMULATOR} missing: build it with `make emulator`", pytrace=False)
     boards = tmp_path / "boards"
     boards.mkdir()
-    emu = Emulator(MISSIONS_EMULATOR, str(boards / "missions"))
+    emu: Any
+    if request.param == "uno":
+        binary, elf = simuno_binary(), example_elf("Missions")
+        if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
+            pytest.fail("simulated Uno or examples/Missions not built: `make simuno uno-firmware`", pytrace=False)
+        emu = Simuno(binary, elf, str(boards / "missions"), str(tmp_path / "simuno.log"))
+    else:
+        if not os.access(MISSIONS_EMULATOR, os.X_OK):
+            pytest.fail(f"{MISSIONS_EMULATOR} missing: build it with `make emulator`", pytrace=False)
+        emu = Emulator(MISSIONS_EMULATOR, str(boards / "missions"))
     emu.start()
     sock = str(tmp_path / "run" / "hubwire.sock")
     cache = tmp_path / "cache"
