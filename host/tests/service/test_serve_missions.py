@@ -208,3 +208,32 @@ def test_exactly_once_on_the_socket(serve: Serve, boards_dir: str) -> None:
         assert b.ask(id=8, op="cancel", run_id=run3["run_id"]) == {"id": 8, "ok": True, "cancelled": True}
         assert dev.missions[DRIVE].cancels == 1
         b.close()
+
+
+def test_a_reboot_mid_run_and_the_service_going_away(serve: Serve, boards_dir: str) -> None:
+    with MissionDevice() as dev:
+        os.symlink(dev.path, os.path.join(boards_dir, "rover"))
+        serve.wait_state("rover", "ready")
+        with hubwire.connect("rover") as rover:
+            job = rover.start("drive", 2.0)
+            statuses: List[str] = []
+            job.on_status(statuses.append)
+            dev.reboot()  # the board restarts under the service: no run of the earlier boot can end
+            with pytest.raises(hubwire.MissionLost, match="rebooted"):
+                job.result(timeout=DEADLINE)
+            assert job.status == "lost"
+            wait_for(lambda: statuses == ["lost"], 15)
+            job = rover.start("drive", 1.0)  # the new boot runs it as its run 1
+            assert job.run == 1
+            job.on_status(statuses.append)
+            dev.mute = True  # the link is lost (the board goes on): the run says so, then goes on
+            wait_for(lambda: job.status == "link lost", 15)
+            dev.mute = False
+            wait_for(lambda: job.status == "running", 30)
+            assert dev.progress(DRIVE, f32(0.5)) and wait_for(dev.idle, 15)
+            assert next(iter(job.feedback(timeout=DEADLINE))) == 0.5
+            wait_for(lambda: statuses == ["lost", "link lost", "running"], 15)
+            serve.stop()  # the service goes away mid-run: this client's job ends, saying where the run is
+            with pytest.raises(hubwire.MissionLost, match="goes on with hubwire serve"):
+                job.result(timeout=DEADLINE)
+        serve.start()  # (the fixture stops it again)
