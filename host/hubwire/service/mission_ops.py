@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 from typing import Any, Dict, Optional
 
+from .. import ops
 from ..cli_support import jsonable
 from ..errors import InvalidValue, LinkLost, MissionFailed
 from ..wire.messages import NakCode
@@ -60,6 +61,8 @@ async def start(client: Any, msg: Dict[str, Any]) -> Dict[str, Any]:
     if b.device is None:
         raise LinkLost(f"board {b.key} is unplugged (last seen on {b.last_port}): nothing was sent")
     ch = b.device.channel(str(msg.get("channel")))
+    if not ch.mission:  # a wrong request, not a refused start: nothing kept under a run id
+        ops.mission_start(b.device.descriptor, ch.name, None)
     run_id = msg.get("run_id")
     e = await runs_of(client.fleet).start(client.fleet, b.key, ch.name, _goal(ch, msg),
                                           None if run_id is None else check_run_id(run_id), timeout_of(msg))

@@ -173,6 +173,9 @@ def test_exactly_once_on_the_socket(serve: Serve, boards_dir: str) -> None:
         bad = a.ask(id=1, op="start", board="rover", channel="drive", goal=2.0, run_id="no/slash")
         assert (bad["ok"], bad["error"]) == (False, "Usage")
         assert a.ask(id=2, op="mission", sub=1, run_id="nope")["error"] == "UnknownRun"
+        notm = a.ask(id=9, op="start", board="rover", channel="beep", goal=1, run_id="k")
+        assert (notm["error"], "not a mission" in notm["message"]) == ("Error", True)
+        assert a.ask(id=10, op="runs")["runs"] == []  # a wrong request keeps nothing
         started = a.ask(id=3, op="start", board="rover", channel="drive", goal=2.0, run_id="kitchen-1")
         assert started["ok"] and started["run"] == {"run_id": "kitchen-1", "board": "rover", "mission": "drive",
                                                     "status": "running", "run": 1, "received": 0}
