@@ -101,7 +101,7 @@ def test_a_client_that_leaves_mid_run_loses_nothing_for_another(serve: Serve, mi
             assert await other.result(timeout=DEADLINE) == pytest.approx(1.5)
             assert everything[:1] == seen and everything == sorted(set(everything))
             again = await second.follow(run_id)  # the outcome stays with the service: told once per follower
-            assert again.status == "succeeded" and await again.result() == pytest.approx(1.5)
+            assert await again.result(timeout=DEADLINE) == pytest.approx(1.5) and again.status == "succeeded"
     asyncio.run(main())
 
 
