@@ -89,6 +89,24 @@ class RemoteSession:
         raw = self._run(self.remote.control_raw(ch, payload, timeout))
         return Frame(m.ACK, 0, id, b"") if raw is None else Frame(m.RESPONSE, 0, id, raw)
 
+    # ----------------------------------------------------------------------------- missions
+
+    def start_mission(self, name: str, goal: Any, timeout: Optional[float] = None,
+                      run_id: Optional[str] = None) -> Any:
+        """``dev.start`` through the service: a :class:`RemoteJob` (status callbacks on the dispatcher)."""
+        from .remote_missions import RemoteJob
+
+        rec, rid = self._run(self.remote.start_run(name, goal, timeout=timeout, run_id=run_id,
+                                                   dispatch=self._dispatcher))
+        return RemoteJob(self, rec, rid)
+
+    def follow(self, run_id: str) -> Any:
+        """The job of a run the service has, from its first progress value."""
+        from .remote_missions import RemoteJob, follow_run
+
+        rec, rid = self._run(follow_run(self.remote, run_id, self._dispatcher))
+        return RemoteJob(self, rec, rid)
+
     # ------------------------------------------------------------------------------ streams
 
     def open_stream(self, id: int, interval_ms: int, maxlen: int = 1024, what: str = "") -> ThreadSubscription:
