@@ -164,6 +164,8 @@ ERROR_TYPES: Dict[str, str] = {
     "UnknownBoard": "hubwire serve has no board of that name (the message lists the boards it has)",
     "ServiceNotRunning": "a board was named but hubwire serve is not running (the message says how to start it)",
     "Busy": "a per-client limit of hubwire serve was reached",
+    "UnknownRun": "hubwire serve keeps no mission run of that id",
+    "Conflict": "another client (or MQTT) already provides that hub channel (the message names both)",
     "MissionFailed": "the mission ended with a failure (its code is in the \"code\" field)",
     "MissionCancelled": "the mission was cancelled on the board",
     "MissionLost": "the board rebooted while the mission ran",

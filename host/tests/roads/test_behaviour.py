@@ -2,10 +2,9 @@
 opens the port) and on a routed one (``hubwire.connect("name")`` through ``hubwire serve``), on the C++
 emulators, and asserts what the API promises; errors must have the same type and text on both roads.
 
-Left out until the service routes them (they pass on the direct road in tests/test_hub_channels.py and
-tests/test_missions.py): hub channels a client provides (``provide`` / ``accept`` / ``action``,
-``hub_binding``) and missions (``start``). Both raise :class:`hubwire.NotRoutedYet` when routed
-(tests/roads/test_not_routed.py).
+Left out until the service routes them (they pass on the direct road in tests/test_hub_channels.py):
+hub channels a client provides (``provide`` / ``accept`` / ``action``, ``hub_binding``), which raise
+:class:`hubwire.NotRoutedYet` when routed (tests/roads/test_not_routed.py).
 """
 from __future__ import annotations
 
@@ -287,3 +286,21 @@ def test_closing_ends_streams_and_event_iterators_alike(both: Callable[..., Dict
         dev.close()
         seen[road] = (events.get(timeout=5), list(iter(events)), _outcome(lambda: [next(samples) for _ in range(100)]))
     assert seen["direct"] == seen["routed"] == (None, [], (hubwire.LinkLost, "session closed"))
+
+
+def test_a_mission_runs_the_same_on_both_roads(board: Open) -> None:
+    """Start, progress in order, one result; a failure with its code; a refused goal (Soak's `count`:
+    progress 1, 2, ... below n, newer values replacing unsent ones; result n * 1000 + its run)."""
+    dev = board("soak", hub_later=True)
+    job = dev.start("count", 6)
+    progress = list(job.feedback(timeout=30))
+    result = job.result(timeout=30)
+    assert progress == sorted(set(progress)) and set(progress) <= set(range(1, 6)), progress
+    assert result // 1000 == 6 and job.status == "succeeded"
+    failing = dev.start("count", 999)
+    with pytest.raises(hubwire.MissionFailed) as failed:
+        failing.result(timeout=30)
+    assert failed.value.code == 9
+    with pytest.raises(hubwire.HubwireError) as refused:
+        dev.start("count", 0).result(timeout=30)
+    assert type(refused.value).__name__ in ("NakError", "MissionFailed"), refused.value

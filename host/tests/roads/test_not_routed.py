@@ -1,6 +1,6 @@
-"""What the routed road cannot do yet (hub channels a client declares, missions) raises
+"""What the routed road cannot do yet (hub channels a client declares) raises
 :class:`hubwire.NotRoutedYet`, a :class:`hubwire.HubwireError` saying what to do, never AttributeError;
-the same calls work on the direct road (tests/test_hub_connect.py, tests/test_missions.py)."""
+the same calls work on the direct road (tests/test_hub_connect.py)."""
 from __future__ import annotations
 
 from typing import Any, Callable, List
@@ -21,7 +21,7 @@ HUB_CALLS: List[Callable[[Any], Any]] = [
 ]
 
 
-def test_hub_declarations_and_missions_say_they_are_not_routed(roads: Roads) -> None:
+def test_hub_declarations_say_they_are_not_routed(roads: Roads) -> None:
     with hubwire.connect(roads.target("routed", "soak"), timeout=10) as dev:
         assert len(dev.hub) == 0 and dev.notifications_pending == 0
         for i, call in enumerate(HUB_CALLS):
@@ -29,22 +29,17 @@ def test_hub_declarations_and_missions_say_they_are_not_routed(roads: Roads) -> 
                                r"the service \(hubwire serve\) yet: declare them in a program that opens the "
                                "board's port itself"):
                 call(dev)
-        with pytest.raises(hubwire.NotRoutedYet, match="missions are not routed") as e:
-            dev.start("count", 3)
-        assert isinstance(e.value, hubwire.HubwireError) and e.value.what == "missions"
         with pytest.raises(hubwire.InvalidValue):
-            dev.start("count", -1)  # a bad goal is told first, as on the direct road
+            dev.start("count", -1)  # a bad goal is told before anything is sent, as on the direct road
 
 
-def test_async_hub_declarations_and_missions_say_they_are_not_routed(roads: Roads) -> None:
+def test_async_hub_declarations_say_they_are_not_routed(roads: Roads) -> None:
     async def main() -> None:
         async with aconnect(roads, "routed", "soak") as dev:
             assert len(dev.hub) == 0 and dev.notifications_pending == 0
             for call in HUB_CALLS:
                 with pytest.raises(hubwire.NotRoutedYet, match="hub channels a client declares"):
                     call(dev)
-            with pytest.raises(hubwire.NotRoutedYet, match="missions are not routed"):
-                await dev.start("count", 3)
     run(main())
 
 
