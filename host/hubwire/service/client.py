@@ -17,7 +17,10 @@ from .. import ops
 from ..descriptor import Channel, Descriptor
 from ..descriptor_parse import parse_descriptor
 from ..errors import HubwireError, LinkLost
+from ..hub import HubChannels
+from ..hub_face import HubMethods
 from ..session import LinkHealth, ReceivedEvent, StreamSample
+from .hub_client import RemoteHub
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path
 from .streams import RemoteEvents, RemoteStream
 
@@ -160,9 +163,11 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
     return dev
 
 
-class AsyncRemoteDevice:
-    """A board through ``hubwire serve``: read/write/call/stream/events/on as :class:`AsyncDevice`.
-    Closing it ends this client's subscriptions; the board stays connected to the service."""
+class AsyncRemoteDevice(HubMethods):
+    """A board through ``hubwire serve``: read/write/call/stream/events/on as :class:`AsyncDevice`,
+    hub channels as a direct device's (``hub``, ``provide``... ``notify``; service/hub_client.py).
+    Closing it ends this client's subscriptions and lets go of its hub channels; the board stays
+    connected to the service."""
 
     def __init__(self, conn: Connection, board: Dict[str, Any], desc: Descriptor) -> None:
         self.conn = conn
@@ -171,6 +176,41 @@ class AsyncRemoteDevice:
         self._desc = desc
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
+        self._loop = asyncio.get_running_loop()
+        self._hub: Optional[RemoteHub] = None
+        #: where hub channel handlers run (the sync face sets its dispatcher thread)
+        loop = self._loop
+        self.hub_dispatch: Callable[[Callable[[], None]], Any] = lambda fn: loop.call_soon_threadsafe(fn)
+
+    # ------------------------------------------------------------------------- hub channels
+
+    def _hub_side(self) -> Any:
+        if self._hub is None:
+            self._hub = RemoteHub(self, HubChannels(), self._loop, self.hub_dispatch)
+        return self._hub
+
+    async def provide_hub(self, hub: Optional[HubChannels]) -> None:
+        """Offer ``hub`` to the board through the service (``connect(name, hub=...)``): raises as a
+        direct connect for a channel the board expects otherwise, HubConflict naming both when
+        another provider holds one."""
+        if hub is None:
+            return
+        self._hub = side = RemoteHub(self, hub, self._loop, self.hub_dispatch)
+        try:
+            side.check_all()
+            await side.start()
+        except BaseException:
+            side.close()
+            raise
+        await side.fetch_binding()
+
+    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once every hub event given to :meth:`notify` is queued and stored at the service
+        (it then reaches the board exactly once); :class:`hubwire.Timeout` after ``timeout`` s."""
+        from ..errors import Timeout
+
+        if self._hub is not None and not await self._hub.wait_notified(timeout):
+            raise Timeout(f"{len(self._hub.queue)} hub events still wait for hubwire serve after {timeout} s")
 
     async def _watch(self) -> None:
         sub, _ = await self.conn.subscribe("boards", self._board_changed, board=self.key)
@@ -260,7 +300,7 @@ class AsyncRemoteDevice:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),
                             int(s["lost"]), time.monotonic(), int(s["gap"]))
 
-    def event(self, e: Dict[str, Any]) -> ReceivedEvent:
+    def decode_event(self, e: Dict[str, Any]) -> ReceivedEvent:
         ch = self.channel(e["name"])
         return ReceivedEvent(ch.name, ch.codec.decode(bytes.fromhex(e["raw"])), int(e["seq"]), time.monotonic(), ch.id)
 
@@ -285,7 +325,7 @@ class AsyncRemoteDevice:
 
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                ev = self.event(msg["event"])
+                ev = self.decode_event(msg["event"])
                 res = callback(ev if key is None else ev.value)
                 if asyncio.iscoroutine(res):
                     asyncio.get_running_loop().create_task(res)
@@ -297,6 +337,8 @@ class AsyncRemoteDevice:
         return remove
 
     async def close(self) -> None:
+        if self._hub is not None:
+            self._hub.close()
         await self.conn.close()
 
     async def __aenter__(self) -> "AsyncRemoteDevice":

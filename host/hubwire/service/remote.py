@@ -37,6 +37,23 @@ class RemoteSession:
         self._subs: Dict[int, int] = {}  # id(subscription or sink) -> service subscription
         self._cbs: List[Tuple[Any, Callable[..., Any], int]] = []
         self._removers: Dict[Tuple[str, int], Callable[[], None]] = {}
+        # hub channel handlers run on the dispatcher thread, as a direct session's
+        remote.hub_dispatch = lambda fn: self._dispatcher(fn)
+
+    @property
+    def core(self) -> Any:
+        """What :class:`hubwire.Device` reaches for hub channels (service/hub_client.py)."""
+        return self.remote._hub_side()
+
+    def hub_status(self) -> List[Dict[str, Any]]:
+        """Who provides each hub channel of the board, and its binding (op ``hub``)."""
+        async def ask() -> List[Dict[str, Any]]:
+            return list((await self.remote.conn.request("hub", board=self.remote.key)).get("hub") or [])
+        return self._run(ask())  # type: ignore[no-any-return]
+
+    def provide_hub(self, hub: Any) -> None:
+        """``connect(name, hub=...)``: offer ``hub`` to the board through the service."""
+        self._run(self.remote.provide_hub(hub))
 
     @property
     def descriptor(self) -> Optional[Descriptor]:
@@ -116,7 +133,7 @@ class RemoteSession:
 
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                sink.put(self.remote.event(msg["event"]))
+                sink.put(self.remote.decode_event(msg["event"]))
             elif "end" in msg:
                 sink.close()
         self._subs[_ident(sink)] = self._events(sorted(names) if names else None, handler)
@@ -128,7 +145,7 @@ class RemoteSession:
     def add_event_callback(self, name: Optional[str], cb: Callable[[Any], Any]) -> None:
         def handler(msg: Dict[str, Any]) -> None:
             if "event" in msg:
-                ev = self.remote.event(msg["event"])
+                ev = self.remote.decode_event(msg["event"])
                 self._dispatcher(cb, ev if name is None else ev.value)
         self._cbs.append((name, cb, self._events(None if name is None else [name], handler)))
 

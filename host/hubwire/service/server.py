@@ -17,7 +17,7 @@ from .. import __version__
 from ..cli_support import jsonable
 from ..errors import HubwireError, InvalidValue, LinkLost, StreamEnded
 from ..wire.messages import NakCode
-from . import durable_ops
+from . import durable_ops, hub_ops
 from .fleet import Fleet
 from .protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json
 from .sockdir import ensure_dir
@@ -288,6 +288,17 @@ class _Client:
     async def op_notify(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         """A hub event for the board (PROTOCOL.md 10.3): answered once queued (and stored)."""
         return durable_ops.notify(self.fleet, msg)
+
+    # ----------------------------------------------------------- hub channels (hub_ops.py)
+
+    async def op_provide(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.provide(self, msg)
+
+    async def op_hub_answer(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.hub_answer(self, msg)
+
+    async def op_hub(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.hub_status(self, msg)
 
     async def op_events(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         self._check_sub(msg)

@@ -107,7 +107,7 @@ class RemoteEvents(EventIterator):
 
     def _push(self, msg: Dict[str, Any]) -> None:
         if "event" in msg:
-            self._q.q.append(self.dev.event(msg["event"]))
+            self._q.q.append(self.dev.decode_event(msg["event"]))
         elif "end" in msg:
             self._q.end = _Closed()
         self._q.ready.set()
