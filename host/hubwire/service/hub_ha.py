@@ -6,7 +6,7 @@
 | reads a bool | `switch` | the value topic | `.../set` |
 | writes a value (`report`) | `sensor` (`binary_sensor` for a bool) | the value topic | |
 | calls an action (`alarm`) | `event` (each call) | `.../call` | |
-| takes events (`mode`) | `select` (an integer within a range of at most 16 values, a bool), else `number` (a box) | the value topic (last sent) | `.../set` |
+| takes events (`mode`) | `number` (a box: sending one is `number.set_value`), `select` for a bool | the value topic (last sent) | `.../set` |
 
 Entities join the board's device (``hubwire_<key>``) with unique ids ``hubwire_<key>--hub-<channel>``
 and object ids ``hub-<channel>``: no board channel has a ``-`` in its name, so none collides.
@@ -24,8 +24,6 @@ __all__ = ["hub_discovery", "entity"]
 
 ORIGIN = {"name": "hubwire", "sw_version": __version__,
           "support_url": "https://github.com/hubwire/hubwire/blob/main/docs/MQTT.md"}
-#: an integer event becomes a select when its range has at most this many values
-SELECT_MAX = 16
 
 
 def _scalar(ch: Channel) -> Optional[str]:
@@ -72,9 +70,6 @@ def entity(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id
                 cfg.update(payload_on="true", payload_off="false", state_on="true", state_off="false")
             else:
                 cfg["options"] = ["false", "true"]
-        elif "e" in exp.access and t in INTEGER_TYPES and lo is not None and hi is not None and hi - lo < SELECT_MAX:
-            kind = "select"
-            cfg["options"] = [str(i) for i in range(int(lo), int(hi) + 1)]
         elif t in NUMERIC_TYPES:
             kind = "number"
             ranged = exp.min is not None and exp.max is not None

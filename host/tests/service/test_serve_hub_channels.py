@@ -153,3 +153,16 @@ def test_a_type_the_board_does_not_expect_raises_as_direct(serve: Serve, soak: E
     hub.event("tick", type="u32")
     with pytest.raises(HubChannelError, match="tally"):
         hubwire.connect("soak", hub=hub)
+
+
+def test_notify_and_hub_on_a_routed_device_without_hub_channels(serve: Serve, soak: Emulator) -> None:
+    """Before: ``dev.notify`` and ``dev.hub`` raised AttributeError through the service."""
+    serve.wait_state("soak", "ready")
+    with hubwire.connect("soak") as dev:
+        assert isinstance(dev.hub, hubwire.HubChannels)
+        before = dev.ticks
+        dev.notify("tick", 11)  # the board's own type when the caller declared none
+        dev.wait_notified(10)
+        wait_for(lambda: dev.ticks == before + 1, what="tick applied")
+        with pytest.raises(HubChannelError):
+            dev.notify("tally", 1)  # not an event of the board
