@@ -144,3 +144,29 @@ def test_the_dashboard_feed_names_the_providers() -> None:
     feed.key, feed.providers = "thermostat", fleet.hub
     assert feed.hub_providers() == {"setpoint": "client 'a.py' (pid 1)", "report": "", "alarm": "",
                                     "mode": "the service (notify)"}
+
+
+def test_the_mqtt_bridge_takes_a_channel_when_its_client_goes(caplog: pytest.LogCaptureFixture) -> None:
+    pytest.importorskip("aiomqtt")
+    from hubwire.service.hub_topics import HubBridge
+
+    async def main() -> None:
+        fleet = FakeFleet()
+        fleet.boards = lambda: [fleet.board]  # type: ignore[attr-defined]
+        client = Answering("client 'heater.py' (pid 812)")
+        fleet.hub.claim("thermostat", client, entries("setpoint"))
+        bridge = HubBridge(fleet, "127.0.0.1", 1, ["thermostat/*"])
+        remove = fleet.hub.watch(bridge._changed)
+        bridge.sync("thermostat")
+        assert fleet.hub.holder("thermostat", "setpoint") is client
+        assert fleet.hub.holder("thermostat", "report") is bridge and fleet.hub.holder("thermostat", "alarm") is bridge
+        assert "client 'heater.py' (pid 812)" in caplog.text and "MQTT" in caplog.text
+        status = bridge.latest["hubwire/thermostat/hub"]
+        assert "heater.py" in status
+        fleet.hub.release(client)
+        await asyncio.sleep(0.01)  # the bridge resyncs on the loop
+        assert fleet.hub.holder("thermostat", "setpoint") is bridge
+        assert rows(fleet)["setpoint"]["status"] == "waiting"  # no value from MQTT yet: not declared
+        assert fleet.channels.get("setpoint") is None
+        remove()
+    asyncio.run(main())
