@@ -32,7 +32,12 @@ NOTIFY_LIMIT = 4096
 
 
 def _program() -> str:
-    return os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python"
+    """How this program names itself to the service: its script, or its package for ``python -m``."""
+    path = sys.argv[0] if sys.argv and sys.argv[0] else ""
+    name = os.path.basename(path)
+    if name == "__main__.py":
+        name = os.path.basename(os.path.dirname(path))
+    return name or "python"
 
 
 class RemoteHub:
@@ -54,6 +59,7 @@ class RemoteHub:
         self.last_binding: Dict[str, str] = {}
         self._holding = False
         self._update: Optional["asyncio.Task[None]"] = None
+        self._updating: Optional[asyncio.Lock] = None  # one update at a time (made on the loop)
         channels.add_listener(self)
 
     # --------------------------------------------------------------- what the faces ask for
@@ -115,6 +121,12 @@ class RemoteHub:
         self._update = self.loop.create_task(self._send_update())
 
     async def _send_update(self) -> None:
+        if self._updating is None:
+            self._updating = asyncio.Lock()
+        async with self._updating:  # several declarations in a row: each sends the set as it is then
+            await self._update_now()
+
+    async def _update_now(self) -> None:
         try:
             if self.sub is None:
                 await self.start()
