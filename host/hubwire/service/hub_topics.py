@@ -40,6 +40,8 @@ MAX_PAYLOAD = 256 * 1024
 QUEUE = 256
 #: seconds between attempts to reach the broker
 RECONNECT_S = 1.0
+#: conflicts remembered so that each is logged once (beyond it they are forgotten, and logged again)
+MAX_CONFLICTS_LOGGED = 1024
 
 
 class HubBridge(Provider):
@@ -102,6 +104,8 @@ class HubBridge(Provider):
             except HubConflict as e:
                 mark = (key, exp.name, holder.label if holder is not None else "")
                 if mark not in self._conflicts:
+                    if len(self._conflicts) >= MAX_CONFLICTS_LOGGED:
+                        self._conflicts.clear()  # (each is logged again, at worst)
                     self._conflicts.add(mark)
                     log.error("hubwire serve: MQTT: %s", e)
             except Exception as e:  # noqa: BLE001 - a channel that cannot be declared stays unbound
