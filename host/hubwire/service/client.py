@@ -157,6 +157,8 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
         reply = await conn.request("describe", board=board, timeout=timeout)
         dev = AsyncRemoteDevice(conn, reply["board"], parse_descriptor(reply["descriptor"]))
         await dev._watch()
+        if dev.descriptor.hub:  # hub_binding() as the service binds the board now
+            await dev._hub_side().fetch_binding()
     except BaseException:
         await conn.close()
         raise
@@ -186,7 +188,7 @@ class AsyncRemoteDevice(HubMethods):
 
     def _hub_side(self) -> Any:
         if self._hub is None:
-            self._hub = RemoteHub(self, HubChannels(), self._loop, self.hub_dispatch)
+            self._hub = RemoteHub(self, HubChannels(), self._loop)
         return self._hub
 
     async def provide_hub(self, hub: Optional[HubChannels]) -> None:
@@ -195,7 +197,9 @@ class AsyncRemoteDevice(HubMethods):
         another provider holds one."""
         if hub is None:
             return
-        self._hub = side = RemoteHub(self, hub, self._loop, self.hub_dispatch)
+        if self._hub is not None:
+            self._hub.close()
+        self._hub = side = RemoteHub(self, hub, self._loop)
         try:
             side.check_all()
             await side.start()

@@ -42,15 +42,13 @@ def _program() -> str:
 
 class RemoteHub:
     """The hub channels ``channels`` offered to the board of ``remote`` (an ``AsyncRemoteDevice``)
-    through the service. ``dispatch(fn)`` runs a handler where callbacks run. Also what the faces'
-    ``_session.core`` stands for here (``hub``, ``descriptor``, ``sync_cv``, ``closed``)."""
+    through the service; handlers run through ``remote.hub_dispatch`` (where callbacks run). Also
+    what the faces' ``_session.core`` stands for here (``hub``, ``descriptor``, ``sync_cv``, ``closed``)."""
 
-    def __init__(self, remote: Any, channels: HubChannels, loop: asyncio.AbstractEventLoop,
-                 dispatch: Callable[[Callable[[], None]], Any]) -> None:
+    def __init__(self, remote: Any, channels: HubChannels, loop: asyncio.AbstractEventLoop) -> None:
         self.remote = remote
         self.channels = channels
         self.loop = loop
-        self.dispatch = dispatch
         self.sub: Optional[int] = None
         #: hub events handed to the service, not answered yet
         self.queue: List[Tuple[str, Any]] = []
@@ -235,7 +233,7 @@ class RemoteHub:
                 task.add_done_callback(settle)
                 return
             loop.call_soon_threadsafe(finish, True, res)
-        self.dispatch(call)
+        self.remote.hub_dispatch(call)
 
     def _answer(self, rid: Any, raw: Optional[bytes] = None, error: Optional[str] = None) -> None:
         if self.sub is None or self.remote.conn.closed:

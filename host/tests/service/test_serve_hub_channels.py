@@ -66,11 +66,13 @@ def test_a_client_provides_the_boards_hub_channels_through_the_service(serve: Se
         wait_for(lambda: dev.tally_acked >= 20 and dev.bump_ok >= 4, what="tallies and bumps through the service")
         dev.hub_load = False
         wait_for(lambda: dev.tally_acked + dev.tally_failed == dev.tally_token, what="the last tally answered")
-        # every tally the board saw acknowledged reached this client's handler exactly once, in order
+        # every tally the board saw acknowledged reached this client's handler, each once and in order
+        # (one that timed out on the board, 240 on a loaded machine, may or may not have)
         with t.lock:
-            acked = dev.tally_acked
-            assert t.tallies[:acked] == list(range(t.tallies[0], t.tallies[0] + acked))
-            assert len(set(t.tallies)) == len(t.tallies)
+            acked, failed = dev.tally_acked, dev.tally_failed
+            assert t.tallies == sorted(set(t.tallies)), t.tallies
+            assert acked <= len(t.tallies) <= acked + failed
+            assert dev.last_hub_failure in (0, 240)
         assert dev.bump_wrong == 0 and dev.bump_ok >= 4
         # a hub event from this client, with the same call as direct
         before = dev.ticks
@@ -130,8 +132,11 @@ def test_the_asyncio_face_provides_too(serve: Serve, soak: Emulator) -> None:
         hub.accept("tally", on_tally, type="u32")
         hub.action("bump", lambda n: n + 1, type="u32", returns="u32")
         hub.event("tick", type="u32")
+        async with hubwire.aio.connect("soak") as watcher:
+            assert watcher.hub_binding() == {"tally": "UNKNOWN_CHANNEL", "bump": "UNKNOWN_CHANNEL", "tick": "ok"}
         async with hubwire.aio.connect("soak", hub=hub) as dev:
             assert dev.hub is hub
+            assert dev.hub_binding() == {"tally": "ok", "bump": "ok", "tick": "ok"}
             await dev.write("hub_load", True)
             for _ in range(400):
                 if len(seen) >= 10:
