@@ -201,7 +201,8 @@ class AsyncRemoteDevice(HubMethods):
             self._hub.close()
         self._hub = side = RemoteHub(self, hub, self._loop)
         try:
-            side.check_all()
+            held = tuple(str(r.get("channel")) for r in await side.fetch_status() if r.get("by"))
+            side.check_all(held)
             await side.start()
         except BaseException:
             side.close()

@@ -83,12 +83,14 @@ class RemoteHub:
 
     # ----------------------------------------------------------------------------- binding
 
-    def check_all(self) -> None:
-        """HubChannelError naming each hub channel the board uses that ``channels`` lacks or
-        declares otherwise (as a direct ``connect(..., hub=...)``)."""
+    def check_all(self, elsewhere: Tuple[str, ...] = ()) -> None:
+        """HubChannelError naming each hub channel the board uses that ``channels`` declares
+        otherwise, or lacks and no other provider holds (``elsewhere``: another client, the MQTT
+        bridge, the service for events), as a direct ``connect(..., hub=...)`` raises."""
         desc = self.remote.descriptor
         bad = [mismatch(exp, self.channels.get(exp.name), code, desc.name)
-               for exp in desc.hub for code in (bind_status(exp, self.channels.get(exp.name)),) if code]
+               for exp in desc.hub for code in (bind_status(exp, self.channels.get(exp.name)),)
+               if code and not (exp.name in elsewhere and self.channels.get(exp.name) is None)]
         if bad:
             raise HubChannelError("; ".join(bad))
 
@@ -145,9 +147,14 @@ class RemoteHub:
         return asyncio.run_coroutine_threadsafe(self.fetch_binding(), self.loop).result(30)
 
     async def fetch_binding(self) -> Dict[str, str]:
+        await self.fetch_status()
+        return dict(self.last_binding)
+
+    async def fetch_status(self) -> List[Dict[str, Any]]:
+        """The service's rows for the board's hub channels (op ``hub``)."""
         rows = (await self.remote.conn.request("hub", board=self.remote.key)).get("hub") or []
         self._note_binding(rows)
-        return dict(self.last_binding)
+        return [r for r in rows if isinstance(r, dict)]
 
     # ----------------------------------------------------------------- the board's requests
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 import shutil
 import subprocess
 from typing import Any, Callable, Dict, Iterator, List
@@ -22,7 +23,11 @@ from .conftest import Broker
 
 
 @pytest.fixture
-def thermostat_served(broker: Broker, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[Serve]:
+def thermostat_served(broker: Broker, tmp_path: Any, monkeypatch: pytest.MonkeyPatch,
+                      request: pytest.FixtureRequest) -> Iterator[Serve]:
+    """The Thermostat served with ``--mqtt-hub`` for the patterns given as the fixture's parameter
+    (default ``thermostat/*``)."""
+    patterns = list(getattr(request, "param", ["thermostat/*"]))
     if shutil.which("mosquitto_sub") is None:
         pytest.fail("mosquitto_sub missing: run tools/setup.sh (apt-get install mosquitto-clients)", pytrace=False)
     binary, elf = simuno_binary(), example_elf("Thermostat")
@@ -41,7 +46,7 @@ def thermostat_served(broker: Broker, tmp_path: Any, monkeypatch: pytest.MonkeyP
     monkeypatch.setenv("HUBWIRE_SOCKET", sock)
     monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
     serve = Serve(str(boards), sock, env, str(tmp_path / "serve.log"),
-                  ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-hub", "thermostat/*"])
+                  ["--mqtt", f"127.0.0.1:{broker.port}"] + [a for p in patterns for a in ("--mqtt-hub", p)])
     serve.start()
     try:
         yield serve
@@ -119,6 +124,51 @@ def test_the_thermostat_runs_on_hub_channels_from_mqtt(thermostat_served: Serve,
         assert "MQTT" in info[info.index("provided through hubwire serve"):], info
         # no request refused; one may time out (240: kHubTimeout) on a loaded machine
         assert int(get("last_failure")) in (0, 240)
+    finally:
+        sub.terminate()
+        sub.wait(10)
+        out.close()
+
+
+@pytest.mark.parametrize("thermostat_served", [["thermostat/setpoint"]], indirect=True)
+def test_a_client_beside_mqtt_and_the_status_topic_when_it_leaves(thermostat_served: Serve, broker: Broker,
+                                                                  tmp_path: Any) -> None:
+    """MQTT backs the setpoint only; a Python client provides the report and the alarm. The status
+    topic names each provider, and says unbound once the client has gone; the board stops."""
+    serve = thermostat_served
+    out = open(tmp_path / "sub.txt", "w+")
+    sub = subprocess.Popen(["mosquitto_sub", "-h", "127.0.0.1", "-p", str(broker.port), "-v",
+                            "-t", "hubwire/thermostat/hub"], stdout=out, stderr=subprocess.STDOUT)
+
+    def status() -> Dict[str, Any]:
+        got = [ln.split(" ", 1)[1] for ln in open(tmp_path / "sub.txt").read().splitlines()]
+        return {r["channel"]: r for r in json.loads(got[-1])["channels"]} if got else {}
+    try:
+        serve.wait_state("thermostat", "ready")
+        subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(broker.port), "-q", "1", "-r",
+                        "-t", "hubwire/thermostat/hub/setpoint/set", "-m", "22.5"], check=True, timeout=30)
+        wait_for(lambda: status().get("setpoint", {}).get("status") == "ok", what="setpoint from MQTT")
+        reports: List[int] = []
+        hub = hubwire.HubChannels()
+        hub.accept("report", reports.append, type="u16")
+        hub.action("alarm", lambda t: True, type="f32", returns="bool")
+        # the setpoint (MQTT's) and the mode events (the service's) are held elsewhere: not needed here
+        with hubwire.connect("thermostat", hub=hub) as dev:
+            wait_for(lambda: all(r["status"] == "ok" for r in status().values()), what="every channel bound")
+            st = status()
+            assert st["setpoint"]["kind"] == "mqtt" and st["report"]["kind"] == "client", st
+            assert f"pid {os.getpid()}" in st["report"]["by"] and f"pid {os.getpid()}" in st["alarm"]["by"]
+            wait_for(lambda: len(reports) >= 2, 30, what="reports at the client")
+            wait_for(lambda: dev.setpoints >= 2, 30, what="the MQTT setpoint read")
+        wait_for(lambda: status()["report"]["status"] == "unbound" and status()["report"]["by"] is None,
+                 what="the status topic says unbound")
+        assert status()["setpoint"]["kind"] == "mqtt"
+
+        def stopped() -> bool:  # the board is unbound: it asks for no setpoint any more
+            before = int(serve.cli("get", "thermostat", "setpoints").stdout)
+            time.sleep(2.5)
+            return int(serve.cli("get", "thermostat", "setpoints").stdout) == before
+        wait_for(stopped, 60, what="the board stopped")
     finally:
         sub.terminate()
         sub.wait(10)
