@@ -69,6 +69,8 @@ class HubBridge(Provider):
         self.connected = asyncio.Event()
         self._wake = asyncio.Event()
         self._conflicts: Set[Tuple[str, str, str]] = set()
+        #: what this connection published, retained (cleared at each connect: all go out again)
+        self._published: Dict[str, str] = {}
         self._dirty: Set[str] = set()
 
     # ------------------------------------------------------------------------- which channels
@@ -159,6 +161,8 @@ class HubBridge(Provider):
         return self.topics.board(key, "hub", level(name))
 
     def _retain(self, topic: str, payload: str) -> None:
+        if self._published.get(topic) == payload and topic not in self.latest:
+            return  # the broker has it (a status or config republished unchanged)
         self.latest[topic] = payload
         self._wake.set()
 
@@ -186,6 +190,7 @@ class HubBridge(Provider):
                 except aiomqtt.MqttError:
                     self.latest.setdefault(topic, payload)
                     raise
+                self._published[topic] = payload
 
     # ----------------------------------------------------------------------------- commands
 
@@ -269,6 +274,7 @@ class HubBridge(Provider):
                                   username=self.username, password=self.password, tls_context=self.tls_context,
                                   max_queued_incoming_messages=QUEUE) as client:
             self.client = client
+            self._published.clear()
             base = f"{self.topics.prefix}/+/hub/+"
             await client.subscribe(base, qos=1)
             await client.subscribe(base + "/set", qos=1)

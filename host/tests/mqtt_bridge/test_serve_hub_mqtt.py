@@ -80,13 +80,13 @@ def test_the_thermostat_runs_on_hub_channels_from_mqtt(thermostat_served: Serve,
     try:
         serve.wait_state("thermostat", "ready")
         # before any setpoint: MQTT holds the channels, the setpoint waits for its first value
-        wait_for(lambda: status().get("setpoint", {}).get("status") == "waiting", what="setpoint waiting")
+        wait_for(lambda: status().get("setpoint", {}).get("status") == "waiting", 60, what="setpoint waiting")
         st = status()
         assert st["report"]["kind"] == st["alarm"]["kind"] == "mqtt" and st["mode"]["kind"] == "service", st
         # Home Assistant: the setpoint a number, the report a sensor, the mode a number (an event
         # sent with number.set_value), the alarm an event entity
         for kind, name in (("number", "setpoint"), ("sensor", "report"), ("number", "mode"), ("event", "alarm")):
-            wait_for(lambda k=kind, n=name: topic(f"homeassistant/{k}/thermostat/hub-{n}/config"), what=f"HA {name}")
+            wait_for(lambda k=kind, n=name: topic(f"homeassistant/{k}/thermostat/hub-{n}/config"), 60, what=f"HA {name}")
         setpoint_cfg = json.loads(topic("homeassistant/number/thermostat/hub-setpoint/config")[-1])
         assert setpoint_cfg["command_topic"] == "hubwire/thermostat/hub/setpoint/set"
         assert setpoint_cfg["state_topic"] == "hubwire/thermostat/hub/setpoint"
@@ -94,22 +94,22 @@ def test_the_thermostat_runs_on_hub_channels_from_mqtt(thermostat_served: Serve,
 
         # the setpoint from MQTT: the board binds, reads it, and heats toward it once mode is 1
         pub("hubwire/thermostat/hub/setpoint/set", "25")
-        wait_for(lambda: all(r["status"] == "ok" for r in status().values()), what="every hub channel bound")
-        wait_for(lambda: int(get("setpoints")) >= 2, 30, what="the board read the setpoint")
+        wait_for(lambda: all(r["status"] == "ok" for r in status().values()), 60, what="every hub channel bound")
+        wait_for(lambda: int(get("setpoints")) >= 2, 60, what="the board read the setpoint")
         assert topic("hubwire/thermostat/hub/setpoint")[-1] == "25.0"
         pub("hubwire/thermostat/hub/mode/set", "1")
-        wait_for(lambda: int(get("modes")) == 1, 30, what="mode event applied")
-        wait_for(lambda: get("heating") == "True", 30, what="heating below the MQTT setpoint")
+        wait_for(lambda: int(get("modes")) == 1, 60, what="mode event applied")
+        wait_for(lambda: get("heating") == "True", 60, what="heating below the MQTT setpoint")
         # its report (tenths of a degree) is published, retained
-        wait_for(lambda: len(topic("hubwire/thermostat/hub/report")) >= 2, 30, what="reports on MQTT")
+        wait_for(lambda: len(topic("hubwire/thermostat/hub/report")) >= 2, 60, what="reports on MQTT")
         assert all(150 <= int(v) <= 400 for v in topic("hubwire/thermostat/hub/report"))
         # a setpoint far below the temperature: heating stops, and the board calls the alarm
         pub("hubwire/thermostat/hub/setpoint/set", "5")
-        wait_for(lambda: get("heating") == "False", 30, what="heating off above the new setpoint")
-        wait_for(lambda: topic("hubwire/thermostat/hub/alarm/call"), 30, what="an alarm call on MQTT")
+        wait_for(lambda: get("heating") == "False", 60, what="heating off above the new setpoint")
+        wait_for(lambda: topic("hubwire/thermostat/hub/alarm/call"), 60, what="an alarm call on MQTT")
         call = json.loads(topic("hubwire/thermostat/hub/alarm/call")[-1])
         assert call["event_type"] == "alarm" and call["arg"] > 10
-        wait_for(lambda: int(get("alarms")) >= 1, 30, what="the alarm answered true")
+        wait_for(lambda: int(get("alarms")) >= 1, 60, what="the alarm answered true")
 
         # a Python client that wants the same channels: refused, both providers named
         hub = hubwire.HubChannels()
@@ -147,20 +147,20 @@ def test_a_client_beside_mqtt_and_the_status_topic_when_it_leaves(thermostat_ser
         serve.wait_state("thermostat", "ready")
         subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(broker.port), "-q", "1", "-r",
                         "-t", "hubwire/thermostat/hub/setpoint/set", "-m", "22.5"], check=True, timeout=30)
-        wait_for(lambda: status().get("setpoint", {}).get("status") == "ok", what="setpoint from MQTT")
+        wait_for(lambda: status().get("setpoint", {}).get("status") == "ok", 60, what="setpoint from MQTT")
         reports: List[int] = []
         hub = hubwire.HubChannels()
         hub.accept("report", reports.append, type="u16")
         hub.action("alarm", lambda t: True, type="f32", returns="bool")
         # the setpoint (MQTT's) and the mode events (the service's) are held elsewhere: not needed here
         with hubwire.connect("thermostat", hub=hub) as dev:
-            wait_for(lambda: all(r["status"] == "ok" for r in status().values()), what="every channel bound")
+            wait_for(lambda: all(r["status"] == "ok" for r in status().values()), 60, what="every channel bound")
             st = status()
             assert st["setpoint"]["kind"] == "mqtt" and st["report"]["kind"] == "client", st
             assert f"pid {os.getpid()}" in st["report"]["by"] and f"pid {os.getpid()}" in st["alarm"]["by"]
-            wait_for(lambda: len(reports) >= 2, 30, what="reports at the client")
-            wait_for(lambda: dev.setpoints >= 2, 30, what="the MQTT setpoint read")
-        wait_for(lambda: status()["report"]["status"] == "unbound" and status()["report"]["by"] is None,
+            wait_for(lambda: len(reports) >= 2, 60, what="reports at the client")
+            wait_for(lambda: dev.setpoints >= 2, 60, what="the MQTT setpoint read")
+        wait_for(lambda: status()["report"]["status"] == "unbound" and status()["report"]["by"] is None, 60,
                  what="the status topic says unbound")
         assert status()["setpoint"]["kind"] == "mqtt"
 
