@@ -55,7 +55,6 @@ class RemoteHub:
         self.sync_cv = threading.Condition()
         self.closed = False
         self.last_binding: Dict[str, str] = {}
-        self._holding = False
         self._update: Optional["asyncio.Task[None]"] = None
         self._updating: Optional[asyncio.Lock] = None  # one update at a time (made on the loop)
         channels.add_listener(self)
@@ -101,7 +100,7 @@ class RemoteHub:
             return
         sub, reply = await self.remote.conn.subscribe("provide", self._pushed, board=self.remote.key,
                                                       channels=self._entries(), name=_program())
-        self.sub, self._holding = sub, True
+        self.sub = sub
         self._note_binding(reply.get("hub") or [])
 
     def hub_changed(self, hc: HubChannel, removed: bool) -> None:
@@ -163,8 +162,8 @@ class RemoteHub:
             self._request(msg["hub"])
         elif "binding" in msg and isinstance(msg["binding"], list):
             self._note_binding(msg["binding"])
-        elif "end" in msg:
-            self._holding = False
+        elif "end" in msg:  # the service went away: nothing is provided any more
+            self.last_binding = {}
 
     def _request(self, req: Dict[str, Any]) -> None:
         hc = self.channels.get(str(req.get("channel")))

@@ -47,9 +47,7 @@ class RemoteSession:
 
     def hub_status(self) -> List[Dict[str, Any]]:
         """Who provides each hub channel of the board, and its binding (op ``hub``)."""
-        async def ask() -> List[Dict[str, Any]]:
-            return list((await self.remote.conn.request("hub", board=self.remote.key)).get("hub") or [])
-        return self._run(ask())  # type: ignore[no-any-return]
+        return self._run(self.remote._hub_side().fetch_status())  # type: ignore[no-any-return]
 
     def provide_hub(self, hub: Any) -> None:
         """``connect(name, hub=...)``: offer ``hub`` to the board through the service."""
