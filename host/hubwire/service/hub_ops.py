@@ -42,8 +42,8 @@ def peer_label(writer: Any, name: Any) -> str:
             pid = struct.unpack("3i", creds)[0]
     except OSError:
         pid = None
-    text = clip(str(name), MAX_LABEL) if isinstance(name, str) and name else "client"
-    return f"client {text!r}" + (f" (pid {pid})" if pid else "")
+    shown = f" {clip(name, MAX_LABEL)}" if isinstance(name, str) and name else ""  # quoted, escaped
+    return f"client{shown}" + (f" (pid {pid})" if pid else "")
 
 
 class ClientProvider(Provider):

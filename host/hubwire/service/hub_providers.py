@@ -130,8 +130,7 @@ class HubProviders:
             for n in gone:
                 del held[n]
             if gone:
-                log.info("hubwire serve: %s no longer provides %s of %s", clip(provider.label, 80),
-                         ", ".join(gone), k)
+                log.info("hubwire serve: %s no longer provides %s of %s", provider.label, ", ".join(gone), k)
                 self.refresh(k)
 
     def holder(self, key: str, name: str) -> Optional[Provider]:

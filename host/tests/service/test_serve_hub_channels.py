@@ -171,3 +171,40 @@ def test_notify_and_hub_on_a_routed_device_without_hub_channels(serve: Serve, so
         wait_for(lambda: dev.ticks == before + 1, what="tick applied")
         with pytest.raises(HubChannelError):
             dev.notify("tally", 1)  # not an event of the board
+
+
+def test_what_a_client_sends_to_provide_is_checked(serve: Serve, soak: Emulator) -> None:
+    """The socket ops as any program would send them: malformed requests are answered with an
+    error, a client's name is shown quoted, and a refusal reaches the board as REJECTED."""
+    from hubwire.wire.messages import NakCode
+
+    from .test_serve_durable import ready_client
+
+    c = ready_client(serve, "soak")
+    try:
+        assert c.request("provide", board="soak", sub="p", channels="tally")["error"] == "Usage"
+        bad = c.request("provide", board="soak", sub="p", channels=[{"n": "tally", "a": "w", "t": "nope"}])
+        assert not bad["ok"] and "tally" in bad["message"]
+        both = [{"n": "tally", "a": "w", "t": "u32"}, {"n": "bump", "a": "c", "t": "u32", "rt": "u32"}]
+        ok = c.request("provide", board="soak", sub="p", name="\x1b[31mevil\n", channels=both)
+        assert ok["ok"], ok
+        by = {r["channel"]: r["by"] for r in c.request("hub", board="soak")["hub"]}["tally"]
+        assert "\x1b" not in by and "\n" not in by and "\\x1b[31mevil\\n" in by, by
+        assert c.request("hub_answer", sub="nope", req=1)["error"] == "Usage"
+        assert c.request("hub_answer", sub="p", req=1, raw="zz")["error"] == "Usage"
+        assert c.request("hub_answer", sub="p", req=99999)["ok"]  # unknown: dropped
+        wait_for(lambda: c.request("read", board="soak", channel="hub_load")["ok"], what="readable")
+        failed = c.request("read", board="soak", channel="tally_failed")["value"]
+        c.send("write", board="soak", channel="hub_load", value=True)
+        refused = 0
+        while refused < 3:  # refuse the board's writes as they come (it writes only while bound)
+            msg = c.pump()
+            if isinstance(msg.get("hub"), dict):
+                c.send("hub_answer", sub="p", req=msg["hub"]["req"], error="REJECTED")
+                refused += msg["hub"]["channel"] == "tally"
+        c.request("write", board="soak", channel="hub_load", value=False)
+        wait_for(lambda: c.request("read", board="soak", channel="tally_failed")["value"] >= failed + 3,
+                 what="refusals counted on the board")
+        assert c.request("read", board="soak", channel="last_hub_failure")["value"] in (NakCode.REJECTED, 240)
+    finally:
+        c.close()
