@@ -47,10 +47,10 @@ def thermostat_served(broker: Broker, tmp_path: Any, monkeypatch: pytest.MonkeyP
     monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
     serve = Serve(str(boards), sock, env, str(tmp_path / "serve.log"),
                   ["--mqtt", f"127.0.0.1:{broker.port}"] + [a for p in patterns for a in ("--mqtt-hub", p)])
-    serve.start()
     try:
+        serve.start()
         yield serve
-    finally:
+    finally:  # (the simulated Uno is stopped also when the service did not start)
         status = serve.stop()
         assert sim.stop() == 0, sim.log_text()
         assert status == 0, serve.log_text()
