@@ -16,7 +16,7 @@ from typing import Any, Awaitable, Callable, Dict, Optional
 from .. import __version__
 from ..errors import HubwireError, InvalidValue, LinkLost, StreamEnded
 from ..wire.messages import NakCode
-from . import durable_ops, mission_ops
+from . import durable_ops, hub_ops, mission_ops
 from .fleet import Fleet
 from ..client.protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json, jsonable
 from ..client.sockdir import ensure_dir
@@ -287,6 +287,17 @@ class _Client:
     async def op_notify(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         """A hub event for the board (PROTOCOL.md 10.3): answered once queued (and stored)."""
         return durable_ops.notify(self.fleet, msg)
+
+    # ----------------------------------------------------------- hub channels (hub_ops.py)
+
+    async def op_provide(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.provide(self, msg)
+
+    async def op_hub_answer(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.hub_answer(self, msg)
+
+    async def op_hub(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.hub_status(self, msg)
 
     async def op_events(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         self._check_sub(msg)

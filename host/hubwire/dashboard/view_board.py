@@ -90,6 +90,7 @@ class BoardView:
             hub = hub_channels(feed)
             if hub:
                 binding = hub_binding(feed)
+                by = feed.hub_providers() if feed is not None else {}
                 with ui.expansion(f"hub channels it uses ({len(hub)})", value=True).classes("w-full"):
                     for ch in hub:
                         state = binding.get(ch.name, "-")
@@ -98,6 +99,8 @@ class BoardView:
                             ui.label(f"{_access(ch)}, {ch.type_name}").classes("text-gray-600")
                             tag(ui.label("bound here" if state == "ok" else f"not bound here: {state}"),
                                 hub=f"{board.key}.{ch.name}")
+                            if by.get(ch.name):  # through hubwire serve: which client, or MQTT
+                                ui.label(f"provided by {by[ch.name]}").classes("text-gray-600")
             events = [c.name for c in d.channels if c.is_event]
             with ui.expansion(f"events ({', '.join(events) or 'none declared'})", value=True).classes("w-full"):
                 self.events = tag(ui.column().classes("gap-0 font-mono text-sm max-h-64 overflow-auto"),
