@@ -10,7 +10,7 @@ from typing import Any, Dict, List
 
 import pytest
 
-from hubwire.descriptor_parse import parse_descriptor
+from hubwire.descriptor.parse import parse_descriptor
 from hubwire.errors import HubChannelError
 from hubwire.hub import HubChannels
 from hubwire.bridge.hub_ha import hub_discovery
