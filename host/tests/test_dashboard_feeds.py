@@ -74,8 +74,8 @@ def test_a_board_unplugged_loses_its_feed_and_plugged_again_gets_a_new_one(emula
         emulator.bump()
         await until(lambda: second.event_count == 1, "the bumper event")
         assert [(e.n, e.name, e.value) for e in second.events] == [(1, "bumper", True)]
-        ok, msg = await second.write(dev2.channel("left"), 2.0)
-        assert not ok and msg.startswith("refused (OUT_OF_RANGE)")
+        ok, msg, code = await second.write_coded(dev2.channel("left"), 2.0)
+        assert (ok, code) == (False, "OUT_OF_RANGE") and msg == "not sent: left: 2.0 is outside the declared range -1..1"
         ok, msg = await second.call(dev2.channel("selftest"), 2)
         assert (ok, msg) == (True, "2")
         await feeds.stop()
