@@ -195,6 +195,11 @@ def test_the_plot_starts_with_the_first_streamed_numbers_and_plots_what_is_picke
     pick(page, "rover.right", False)
     pick(page, "rover.imu", True)  # a struct: one line per number
     wait_drawn(page, ["imu.ax", "imu.ay", "imu.az", "imu.gyro[0]", "imu.gyro[1]", "imu.gyro[2]"])
+    # the plotted channels' rate: a new subscription at 50 Hz (started at 10)
+    page.locator(sel("rate", "main")).click()
+    page.get_by_role("option", name="50 Hz").click()
+    page.wait_for_function("s => parseFloat(document.querySelector(s).innerText) >= 25",
+                           arg=sel("achieved", "rover.imu"), timeout=WAIT_MS)
     pick(page, "rover.imu", False)
 
 

@@ -8,14 +8,14 @@ from __future__ import annotations
 
 import os
 import re
-from typing import Any, Iterator, Tuple
+from typing import Any, Iterator
 
 import pytest
 
 from conftest import Emulator
-from hubwire.testing import repo_root
+from hubwire.testing import emulator_binary, repo_root
 
-from test_dashboard_browser import WAIT_MS, Dashboard, boards, browser, field, sel, wait_text  # noqa: F401
+from test_dashboard_browser import WAIT_MS, Dashboard, browser, field, sel, wait_text  # noqa: F401
 
 #: every element a user acts with, on the Rover
 CONTROLS = "[data-hw-input^='rover.'], [data-hw-set^='rover.'], [data-hw-call^='rover.'], [data-hw-arg^='rover.']"
@@ -24,8 +24,16 @@ CHART = "[data-hw-plot] [_echarts_instance_]"
 
 
 @pytest.fixture(scope="module")
-def page(boards: Tuple[Emulator, Emulator], browser: Any) -> Iterator[Any]:  # noqa: F811
-    rover, actions = boards
+def rover(tmp_path_factory: Any) -> Iterator[Emulator]:
+    """The emulated Rover, on a port named as a user's would be (it shows on the page)."""
+    board = Emulator(emulator_binary(), str(tmp_path_factory.mktemp("dev") / "ttyACM0"))
+    board.start()
+    yield board
+    board.stop()
+
+
+@pytest.fixture(scope="module")
+def page(rover: Emulator, browser: Any) -> Iterator[Any]:  # noqa: F811
     dash = Dashboard((rover.link,))
     ctx = browser.new_context(viewport={"width": 1366, "height": 768})
     pg = ctx.new_page()
@@ -33,6 +41,14 @@ def page(boards: Tuple[Emulator, Emulator], browser: Any) -> Iterator[Any]:  # n
     pg.goto(dash.url)
     wait_text(pg, sel("state", "rover"), "^ready$")
     wait_text(pg, sel("value", "rover.imu"), r"az: 9\.81")
+    # what a user would have done: moved a motor, run the self test (three bumper events)
+    slider = pg.locator(sel("input", "rover.left"))
+    box = slider.bounding_box()
+    slider.click(position={"x": box["width"] * 0.8, "y": box["height"] / 2})
+    wait_text(pg, sel("status", "rover.left"), r"acked$")
+    field(pg, "arg", "rover.selftest").fill("3")
+    pg.locator(sel("call", "rover.selftest")).click()
+    pg.wait_for_function("s => document.querySelectorAll(s).length >= 3", arg=sel("event", "rover.bumper"))
     yield pg
     ctx.close()
     dash.stop()
@@ -47,6 +63,8 @@ def shoot(page: Any, width: int, height: int, name: str) -> str:
         folder = os.path.join(os.environ.get("TMPDIR", "/tmp"), "hubwire-dashboard")
     os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, name)
+    page.mouse.move(width - 1, height - 1)  # no hover text in the picture
+    page.wait_for_timeout(300)
     page.screenshot(path=path)
     assert os.path.getsize(path) > 10_000
     return path
@@ -78,6 +96,10 @@ def test_at_1366x768_every_control_and_the_events_are_in_view(page: Any) -> None
     assert events and all(e["top"] < 768 - 60 for e in events), events  # the log's first lines show
     plot = boxes(page, CHART)
     assert plot and plot[0]["w"] >= 500 and plot[0]["bottom"] <= 768, plot
+    rows = boxes(page, sel("event", "rover.bumper"))
+    assert rows and rows[0]["bottom"] <= 768, rows  # the newest event is readable without scrolling
+    channels = boxes(page, "[data-hw-channel^='rover.'], [data-hw-action^='rover.']")
+    assert len(channels) == 11 and max(c["bottom"] for c in channels) <= 768, channels  # every channel too
 
 
 def test_at_1920_the_page_uses_the_width(page: Any) -> None:
@@ -148,9 +170,7 @@ DISABLED_JS = """s => [...document.querySelectorAll(s)].map(e => e.matches(
   || !!e.querySelector('input[disabled], [aria-disabled=true]'))"""
 
 
-def test_a_lost_board_shows_stale_values_and_disabled_controls_then_comes_back(
-        page: Any, boards: Tuple[Emulator, Emulator]) -> None:  # noqa: F811
-    rover = boards[0]
+def test_a_lost_board_shows_stale_values_and_disabled_controls_then_comes_back(page: Any, rover: Emulator) -> None:
     at_width(page, 1366, 768)
     rover.stop()  # the board goes away with its port
     try:

@@ -88,6 +88,12 @@ def _page(feeds: Feeds) -> None:
         feed = feeds.feeds.get(board)
         return feed.records.get(name) if feed is not None else None
 
+    def set_rate(key: str, hz: float) -> None:
+        board, _, name = key.partition(".")
+        feed = feeds.feeds.get(board)
+        if feed is not None and name in feed.records:
+            feed.set_rate(name, hz)
+
     @ui.page("/", title="Hubwire dashboard")
     def index() -> None:
         ui.query("body").classes("bg-gray-100")
@@ -108,7 +114,7 @@ def _page(feeds: Feeds) -> None:
             with column:
                 empty = ui.label("no boards yet").classes("text-gray-600")
             with ui.column().classes("hw-side w-full gap-3 min-w-0"):
-                plot = PlotPanel(lookup)
+                plot = PlotPanel(lookup, set_rate)
                 log_view = EventLog()
         views: Dict[str, BoardView] = {}
         tiles: Dict[str, Tile] = {}

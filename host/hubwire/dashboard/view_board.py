@@ -7,6 +7,7 @@ ones received and its inputs are off."""
 from __future__ import annotations
 
 import json
+import os
 import re
 import time
 from typing import Any, Callable, Container, Dict, List, Optional
@@ -137,8 +138,11 @@ class BoardView:
         self.state.set_text(board.state)
         self.state.props["color"] = _STATE_COLOURS.get(board.state, "grey")
         self.link.observe(board.state)
-        self.where.set_text(" ".join(x for x in (board.port or "unplugged",
+        port = board.port or "unplugged"
+        # a device path by its name (its folder in the hover text): /dev/serial/by-id/... is long
+        self.where.set_text(" ".join(x for x in (os.path.basename(port) if port.startswith("/") else port,
                                                    f"id {board.board_id}" if board.board_id else "") if x))
+        self.where.props["title"] = port
         live = board.state == "ready"
         if live == self._live:
             return

@@ -23,7 +23,7 @@ from .words import outcome
 
 __all__ = ["ChannelRow", "ActionRow", "channel_rows"]
 
-_NAME = "font-medium w-24 shrink-0 truncate"
+_NAME = "font-medium w-20 sm:w-24 shrink-0 truncate"
 _VALUE = "font-mono text-sm flex-1 min-w-24"
 _STALE = "text-gray-400 italic"
 
@@ -102,7 +102,7 @@ class ChannelRow:
         if self.note.text != note:
             self.note.set_text(note)
         # how fast a stream delivers (channels read now and then say nothing: it would be noise)
-        rate = f"{rec.achieved():.3g} Hz" if rec.at is not None and not rec.read else ""
+        rate = f"{rec.achieved():.3g} Hz" if rec.at is not None and not rec.read and self._live else ""
         if self.rate.text != rate:
             self.rate.set_text(rate)
         if rec.at is None or rec.at == self._shown:

@@ -1,5 +1,6 @@
 """The page's one plot: the channels the user picked (from any board) on one shared time axis, with a
-window, zoom (mouse wheel or the slider under it), pause and CSV of what is plotted.
+window, the rate of the plotted channels, zoom (mouse wheel or the slider under it), pause and CSV of
+what is plotted.
 
 Time labels are spaced by ECharts and any that would overlap a neighbour is hidden (a time axis
 packs labels every few seconds whatever the width, which made them run together on narrow plots)."""
@@ -12,7 +13,7 @@ from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 from nicegui import ui
 
 from .attrs import tag
-from .model import ChannelRecord, decimate, merge_csv
+from .model import RATES, ChannelRecord, decimate, merge_csv
 
 __all__ = ["PlotPanel", "WINDOWS", "PLOT_POINTS"]
 
@@ -38,8 +39,10 @@ class PlotPanel:
     """One chart of every picked channel; ``lookup("board.channel")`` gives its record (None when the
     board is gone or has no such channel now)."""
 
-    def __init__(self, lookup: Callable[[str], Optional[ChannelRecord]]) -> None:
+    def __init__(self, lookup: Callable[[str], Optional[ChannelRecord]],
+                 set_rate: Optional[Callable[[str, float], None]] = None) -> None:
         self.lookup = lookup
+        self.set_rate = set_rate
         self.picks: Set[str] = set()
         #: True until the user picks or unpicks a channel: boards that come add their first channels
         self.auto = True
@@ -51,6 +54,10 @@ class PlotPanel:
             with ui.row().classes("w-full items-center gap-x-3 gap-y-0"):
                 ui.label("Plot").classes("font-bold")
                 self.hint = ui.label("").classes("text-xs text-gray-500 grow")
+                if set_rate is not None:
+                    tag(ui.select({r: f"{r} Hz" for r in RATES}, label="rate", on_change=lambda e: self._rate(e.value)),
+                        "dense", "options-dense", rate="main").classes("w-20") \
+                        .tooltip("samples a second of the plotted channels (values read now and then: 10 at most)")
                 tag(ui.select(list(WINDOWS), value="1 min", on_change=lambda e: self._set_window(WINDOWS[str(e.value)])),
                     "dense", "options-dense", window="main").classes("w-20")
                 tag(ui.switch("pause", on_change=lambda e: self._pause(bool(e.value))), "dense", pause="main")
@@ -71,6 +78,12 @@ class PlotPanel:
         if self.auto and not self.picks:
             self.picks.update(keys)
             self._drawn = None
+
+    def _rate(self, hz: Any) -> None:
+        if hz is None or self.set_rate is None:
+            return
+        for key in sorted(self.picks):
+            self.set_rate(key, float(hz))
 
     def _set_window(self, seconds: float) -> None:
         self.window = seconds
