@@ -47,7 +47,7 @@ async def until(pred: Callable[[], Any], what: str) -> None:
         await asyncio.sleep(0.02)
 
 
-def test_a_board_unplugged_loses_its_feed_and_plugged_again_gets_a_new_one(emulator: Emulator,
+def test_a_board_unplugged_ends_its_feed_and_plugged_again_gets_a_new_one(emulator: Emulator,
                                                                            cache_dir: str) -> None:
     async def scenario() -> None:
         dev = await aio.connect(emulator.link, cache_dir=cache_dir)
@@ -62,12 +62,15 @@ def test_a_board_unplugged_loses_its_feed_and_plugged_again_gets_a_new_one(emula
         await dev.close()
         board.device, board.state, board.port = None, "unplugged", None
         fleet.changed(board)
-        await until(lambda: "rover" not in feeds.feeds, "the feed of the unplugged board to go")
+        # its feed ends, and keeps the last values for the page to show as such (not a blank card)
+        await until(lambda: getattr(feeds.feeds.get("rover"), "ended", False), "the feed of the unplugged board to end")
+        assert feeds.feeds["rover"] is first and first.records["imu"].value is not None
+        await until(lambda: all(t.done() for t in list(first._streams.values()) + first._tasks), "its tasks to end")
 
         dev2 = await aio.connect(emulator.link, cache_dir=cache_dir)
         board.device, board.state, board.port = dev2, "ready", emulator.link
         fleet.changed(board)
-        await until(lambda: "rover" in feeds.feeds, "a feed for the board plugged again")
+        await until(lambda: feeds.feeds["rover"] is not first, "a feed for the board plugged again")
         second = feeds.feeds["rover"]
         assert second is not first and second.dev is dev2 and second.generation > first.generation
         await until(lambda: second.records["imu"].count >= 2, "imu samples from the new session")

@@ -157,6 +157,9 @@ def test_every_loss_seen_has_its_return_seen() -> None:
     link.observe("connecting", now=12.0)
     link.observe("ready", now=12.5)
     assert link.text() == "1 time, back after 2.5 s"
+    link.observe("connecting", now=13.0)  # a reboot noticed while linked: it reads its description again
+    link.observe("ready", now=13.2)
+    assert link.text() == "1 time, back after 2.5 s"
     link.observe("unplugged", now=20.0)
     link.observe("ready", now=21.0)
     assert link.text() == "2 times, back after 1.0 s"

@@ -54,6 +54,8 @@ class BoardFeed:
         self.event_count = 0
         self._streams: Dict[str, "asyncio.Task[None]"] = {}
         self._tasks: List["asyncio.Task[None]"] = []
+        #: True once stopped: its records are the last values the board sent
+        self.ended = False
 
     def start(self) -> None:
         for name, rec in self.records.items():
@@ -62,6 +64,7 @@ class BoardFeed:
         self._tasks = [asyncio.ensure_future(self._poll()), asyncio.ensure_future(self._events())]
 
     async def stop(self) -> None:
+        self.ended = True
         tasks = list(self._streams.values()) + self._tasks
         for t in tasks:
             t.cancel()
@@ -197,13 +200,15 @@ class Feeds:
         return sorted(self.fleet.boards(), key=lambda b: b.key)
 
     def update(self, board: Any) -> None:
-        """A feed for ``board`` if it has a discovered device it has none for yet; none while it has
-        no device."""
+        """A feed for ``board`` if it has a discovered device it has none for yet. While it has no
+        device its feed is stopped and kept: the page shows its last values as such."""
         dev: Optional[aio.AsyncDevice] = board.device
         self.links.setdefault(board.key, LinkRecord()).observe(board.state)
         old = self.feeds.get(board.key)
-        if dev is None and old is not None:  # unplugged: its session is gone, so are its values
-            asyncio.ensure_future(self.feeds.pop(board.key).stop())
+        if dev is None and old is not None:  # unplugged: its session is gone, its last values stay
+            if not old.ended:
+                old.ended = True
+                asyncio.ensure_future(old.stop())
             return
         if dev is None or dev.core.descriptor is None:
             return

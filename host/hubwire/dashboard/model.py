@@ -227,18 +227,21 @@ class LinkRecord:
     lost_at: Optional[float] = None
     #: seconds the last loss lasted (None: not back from one yet)
     back_after: Optional[float] = None
-    _ready: bool = False
+    _ready: bool = False  # ready once at least
 
     def observe(self, state: str, now: Optional[float] = None) -> None:
+        """Note the board's state. A loss is ``lost`` or ``unplugged`` after it was ready; it is back
+        once ready again (``connecting`` on the way, or after a reboot it noticed, is no loss)."""
         now = time.time() if now is None else now
-        ready = state == "ready"
-        if self._ready and not ready:
-            self.lost += 1
-            self.lost_at = now
-        elif ready and not self._ready and self.lost_at is not None:
-            self.back_after = now - self.lost_at
-            self.lost_at = None
-        self._ready = ready
+        if state in ("lost", "unplugged"):
+            if self._ready and self.lost_at is None:
+                self.lost += 1
+                self.lost_at = now
+        elif state == "ready":
+            self._ready = True
+            if self.lost_at is not None:
+                self.back_after = now - self.lost_at
+                self.lost_at = None
 
     def text(self) -> str:
         """``never``, ``1 time, lost now``, ``2 times, back after 1.5 s``."""

@@ -24,7 +24,7 @@ from .words import outcome
 __all__ = ["ChannelRow", "ActionRow", "channel_rows"]
 
 _NAME = "font-medium w-20 sm:w-24 shrink-0 truncate"
-_VALUE = "font-mono text-sm flex-1 min-w-24"
+_VALUE = "font-mono text-sm flex-1 min-w-24 max-h-16 overflow-y-auto"  # a 1 KB value scrolls in its row
 _STALE = "text-gray-400 italic"
 
 
