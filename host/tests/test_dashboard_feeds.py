@@ -128,3 +128,22 @@ def test_device_fleet_keys_boards_by_name_and_tells_their_state(emulator_path: s
     finally:
         a.stop()
         b.stop()
+
+
+def test_a_stream_the_board_cannot_grant_is_read_and_says_so_plainly(emulator: Emulator, cache_dir: str) -> None:
+    """The Rover streams four channels at once (HUBWIRE_MAX_STREAMS) and has five: one is read
+    instead, and its row says why without the protocol's word for it (it said "stream refused: BUSY")."""
+    async def scenario() -> None:
+        dev = await aio.connect(emulator.link, cache_dir=cache_dir)
+        feeds = Feeds(StandInFleet([Board("rover", "rover", None, emulator.link, "ready", dev)]), stream_hz=10.0)
+        await feeds.start()
+        try:
+            recs = feeds.feeds["rover"].records.values()
+            await until(lambda: any(r.read not in ("", "read") for r in recs), "a stream refused")
+            notes = [r.read for r in recs if r.read not in ("", "read")]
+            assert notes == ["read 10 times a second (the board has no stream free for it)"], notes
+        finally:
+            await feeds.stop()
+            await dev.close()
+
+    asyncio.run(scenario())
