@@ -125,10 +125,14 @@ def _page(feeds: Feeds) -> None:
             for key in [k for k in views if k not in keys]:
                 column.remove(views.pop(key).card)
                 tiles_row.remove(tiles.pop(key).card)
+            built = False
             for b in boards:
                 feed = feeds.feeds.get(b.key)
                 v = views.get(b.key)
                 if v is None or v.generation != (feed.generation if feed is not None else 0):
+                    if built:  # one card per refresh: the boards' sessions share this loop
+                        continue
+                    built = True
                     if v is not None:
                         column.remove(v.card)
                         tiles_row.remove(tiles[b.key].card)
@@ -139,8 +143,9 @@ def _page(feeds: Feeds) -> None:
                         tiles[b.key] = Tile(b, feed)
                     views[b.key].card.move(column, target_index=keys.index(b.key) + 1)
                     tiles[b.key].card.move(tiles_row, target_index=keys.index(b.key))
-                views[b.key].refresh(b, visible)
-                tiles[b.key].refresh(b)
+                if b.key in views:
+                    views[b.key].refresh(b, visible)
+                    tiles[b.key].refresh(b)
             log_view.refresh([f for f in (feeds.feeds.get(k) for k in keys) if f is not None])
             empty.set_visibility(not boards)
             count.set_text(f"{len(boards)} board{'s' if len(boards) != 1 else ''}")
