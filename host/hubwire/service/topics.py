@@ -135,6 +135,10 @@ class Topics:
     def stream(self, key: str, channel: str) -> str:
         return self.board(key, "stream", level(channel))
 
+    def result(self, key: str, channel: str) -> str:
+        """The last call of an action: ``{"arg": ..., "value": ...}`` (retained)."""
+        return self.board(key, "result", level(channel))
+
     def event(self, key: str, channel: str) -> str:
         return self.board(key, "event", level(channel))
 
