@@ -22,7 +22,7 @@ def device_page(ha: HomeAssistant, device_id: str, out: Optional[str]) -> str:
     with pw.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         try:
-            ctx = browser.new_context(viewport={"width": 1300, "height": 1250})
+            ctx = browser.new_context(viewport={"width": 1300, "height": 1420})
             # the frontend reads its tokens from localStorage before it asks anyone to log in
             ctx.add_init_script(f"window.localStorage.setItem('hassTokens', {json.dumps(json.dumps(tokens))});")
             page = ctx.new_page()
