@@ -103,7 +103,7 @@ def value_keys(codec: Optional[Codec], unit: Optional[str], name: str, path: str
             keys["unit_of_measurement"] = shown
         if counter:
             keys["state_class"] = "total_increasing"
-        elif cls != "energy":
+        else:
             keys["state_class"] = "measurement"
         if t in FLOAT_TYPES:
             keys["suggested_display_precision"] = 2

@@ -10,6 +10,7 @@ entities, in chromium; HUBWIRE_SCREENSHOT_TO=FILE writes it elsewhere).
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 import select
@@ -260,6 +261,22 @@ def test_availability_on_unplug_and_on_a_clean_stop(rig: Rig) -> None:
     assert rig.serve.stop() == 0  # a clean stop: the service's status goes offline
     for eid in ("sensor.actions_calls", "number.missions_speed", "sensor.large_path", "button.actions_uptime"):
         ha.wait_state(eid, lambda s: s["state"] == "unavailable", "unavailable on a clean stop")
+
+
+def test_every_unit_mapping_is_one_home_assistant_accepts() -> None:
+    """hubwire.service.ha_map.UNITS against Home Assistant's own tables of units per device class
+    (sensor and number), in its venv: a unit it does not accept for the class is an error there."""
+    from hubwire.service.ha_map import UNITS
+    script = ("import json, sys\n"
+              "from homeassistant.components.sensor.const import DEVICE_CLASS_UNITS as S, SensorDeviceClass as SC\n"
+              "from homeassistant.components.number.const import DEVICE_CLASS_UNITS as N, NumberDeviceClass as NC\n"
+              "bad = [(c, u) for c, u in json.load(sys.stdin)\n"
+              "       if u not in S.get(SC(c), {u}) or u not in N.get(NC(c), {u})]\n"
+              "print(json.dumps(bad))\n")
+    r = subprocess.run([os.path.join(setup_ha(), "bin", "python"), "-c", script], input=json.dumps(
+        sorted(set(UNITS.values()))), capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout) == []
 
 
 #: a log line about Hubwire: one of its topics, devices or entities
