@@ -11,7 +11,7 @@ from typing import Any, Dict, List, Optional, Tuple
 from .. import __version__
 from ..descriptor import Channel, Descriptor
 from ..wire.scalars import INTEGER_TYPES, NUMERIC_TYPES, SCALARS
-from .ha_map import MAX_STATE, NUMERIC, TEXT, is_counter, readable_name, unit_class, value_keys
+from .ha_map import MAX_STATE, NUMERIC, TEXT, is_counter, json_text, readable_name, unit_class, value_keys
 from .topics import OFFLINE, ONLINE, Topics, dumps, level
 
 __all__ = ["entity_kind", "entity_kinds", "entity_configs", "discovery_messages", "config_topic", "ORIGIN"]
@@ -149,7 +149,9 @@ def _number(ch: Channel, cfg: Dict[str, Any]) -> None:
 
 
 def _text_max(ch: Channel) -> int:
-    cap = getattr(ch.codec, "capacity", None)
+    """A string's capacity (its bytes bound its characters); JSON text (an array or struct
+    argument) up to what a state may hold (a list's capacity counts elements, not characters)."""
+    cap = getattr(ch.codec, "capacity", None) if ch.codec.kind == "str" else None
     return min(MAX_STATE, int(cap)) if isinstance(cap, int) else MAX_STATE
 
 
@@ -181,7 +183,7 @@ def entity_configs(topics: Topics, service_id: str, key: str, desc: Descriptor, 
             plain_text = ch.codec.kind == "str"
             cfg.update(state_topic=result, max=_text_max(ch),
                        command_template="{{ value | to_json }}" if plain_text else "{{ value }}",
-                       value_template="{{ value_json.arg }}" if plain_text else "{{ value_json.arg | to_json }}")
+                       value_template="{{ value_json.arg }}" if plain_text else json_text("value_json.arg"))
         if len(kinds) > 1:
             assert ch.returns is not None
             rkind, keys = value_keys(ch.returns, ch.unit, ch.name, "value_json.value")

@@ -14,7 +14,7 @@ from typing import Any, Dict, Optional, Tuple
 from ..wire.scalars import FLOAT_TYPES, INTEGER_TYPES, NUMERIC_TYPES
 from ..wire.values import Codec
 
-__all__ = ["UNITS", "unit_class", "readable_name", "value_keys", "MAX_STATE"]
+__all__ = ["UNITS", "unit_class", "readable_name", "value_keys", "json_text", "MAX_STATE"]
 
 #: a unit as a sketch may write it -> (device class, the unit as Home Assistant spells it)
 UNITS: Dict[str, Tuple[str, str]] = {
@@ -44,6 +44,11 @@ NUMERIC = "{{ value_json }}"
 TEXT = "{{ value_json }}"
 #: an array's or struct's JSON text as the state, cut; the whole value is in the attributes
 JSON_TEXT = "{{ value if value | length <= 255 else value[:252] ~ '...' }}"
+
+
+def json_text(path: str) -> str:
+    """A template: the JSON text of ``path`` in the payload, cut to what Home Assistant keeps."""
+    return "{% set s = " + path + " | to_json %}{{ s if s | length <= 255 else s[:252] ~ '...' }}"
 
 
 def unit_class(unit: Optional[str], name: str) -> Tuple[Optional[str], Optional[str]]:
@@ -112,8 +117,7 @@ def value_keys(codec: Optional[Codec], unit: Optional[str], name: str, path: str
     elif codec is not None and codec.kind in ("array", "list", "struct"):
         # not a number: no unit, no state class (HA would refuse every update); the value's JSON
         # is the state (cut to 255) and, whole, the entity's attributes
-        keys["value_template"] = JSON_TEXT if plain else (
-            "{% set s = " + path + " | to_json %}{{ s if s | length <= 255 else s[:252] ~ '...' }}")
+        keys["value_template"] = JSON_TEXT if plain else json_text(path)
         if codec.kind == "struct":
             keys["json_attributes_template"] = "{{ %s | to_json }}" % path
         else:

@@ -157,6 +157,9 @@ def test_actions_with_an_argument_are_a_number_or_text_that_calls_and_a_result_s
     total = entities(LARGE)[("text", "sum")]
     assert total["command_template"] == "{{ value }}" and total["command_topic"] == "hubwire/b/call/sum"
     assert render(total["value_template"], '{"arg":[1,2],"value":3}') == "[1,2]"
+    long_arg = json.dumps({"arg": list(range(1000, 1064)), "value": 1})  # u32[<=64]: over 255 as JSON
+    assert len(render(total["value_template"], long_arg)) == 255  # a text entity's state stays valid
+    assert total["max"] == 255  # characters of JSON text; the list's capacity (16) counts elements
     assert render(entities(LARGE)[("sensor", "sum--result")]["value_template"], '{"arg":[1,2],"value":3}') == "3"
 
 

@@ -205,6 +205,11 @@ def test_commands_from_home_assistant_reach_the_board(rig: Rig) -> None:
     ha.wait_state("binary_sensor.rover_beep_result", lambda s: s["state"] == "on", "beep accepted")
     ha.call("text", "set_value", entity_id="text.large_sum", value="[1, 2, 3]")
     ha.wait_state("sensor.large_sum_result", lambda s: s["state"] == "6", "1+2+3")
+    # a call from another MQTT client, its argument longer than a state may be: the text is cut
+    rig.publish("hubwire/large1k/call/total", json.dumps(list(range(1000, 1064))))
+    ha.wait_state("sensor.large1k_total_result", lambda s: s["state"] == "66016", "the sum")
+    total = ha.wait_state("text.large1k_total", lambda s: s["state"].startswith("[1000,"), "the argument")
+    assert len(total["state"]) == 255 and total["state"].endswith("...")
     ha.call("number", "set_value", entity_id="number.missions_speed", value=1.5)
     ha.wait_state("number.missions_speed", lambda s: s["state"] == "1.5", "1.5 read back")
 
