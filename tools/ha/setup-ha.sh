@@ -25,8 +25,11 @@ PY=$(find_python) || { echo "setup-ha: no Python 3.11+ with ssl, sqlite3 and ven
 MINOR=$("$PY" -c 'import sys; print(sys.version_info[1])')
 if [ "$MINOR" -ge 13 ]; then
     HA_VERSION=${HUBWIRE_HA_VERSION:-2025.4.4}
+    PINS=""
 else
     HA_VERSION=${HUBWIRE_HA_VERSION:-2024.3.3}
+    # its dependencies are not all pinned: josepy 2 dropped what its acme imports
+    PINS="josepy<2"
 fi
 DIR=${HUBWIRE_HA_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/hubwire/ha-$HA_VERSION-py3.$MINOR}
 
@@ -40,7 +43,7 @@ if [ ! -f "$DIR/.complete" ]; then
     # rather than by Home Assistant at its first start; versions as the manifests pin them
     "$DIR/bin/python" - >"$DIR/requirements-ha.txt" <<'PY'
 import json, pathlib, homeassistant.components as c
-root, todo, seen, reqs = pathlib.Path(c.__path__[0]), ["mqtt", "frontend", "config", "api", "onboarding"], set(), set()
+root, todo, seen, reqs = pathlib.Path(c.__path__[0]), ["mqtt", "frontend", "config", "api", "onboarding", "backup"], set(), set()
 while todo:
     name = todo.pop()
     if name in seen or not (root / name / "manifest.json").exists():
@@ -51,7 +54,7 @@ while todo:
     todo += m.get("dependencies", []) + m.get("after_dependencies", [])
 print("\n".join(sorted(reqs)))
 PY
-    "$DIR/bin/python" -m pip install -q -r "$DIR/requirements-ha.txt" >&2
+    "$DIR/bin/python" -m pip install -q -r "$DIR/requirements-ha.txt" $PINS >&2
     touch "$DIR/.complete"
 fi
 echo "$DIR"

@@ -18,7 +18,7 @@ __all__ = ["UNITS", "unit_class", "readable_name", "value_keys", "json_text", "M
 
 #: a unit as a sketch may write it -> (device class, the unit as Home Assistant spells it)
 UNITS: Dict[str, Tuple[str, str]] = {
-    "V": ("voltage", "V"), "mV": ("voltage", "mV"), "kV": ("voltage", "kV"),
+    "V": ("voltage", "V"), "mV": ("voltage", "mV"),
     "A": ("current", "A"), "mA": ("current", "mA"),
     "W": ("power", "W"), "kW": ("power", "kW"),
     "C": ("temperature", "°C"), "°C": ("temperature", "°C"), "degC": ("temperature", "°C"),

@@ -70,6 +70,12 @@ class HomeAssistant:
                     "  latitude: 0\n  longitude: 0\n  elevation: 0\n  currency: EUR\n  country: DE\n"
                     f"http:\n  server_host: 127.0.0.1\n  server_port: {self.port}\n"
                     "frontend:\nconfig:\napi:\nlogger:\n  default: info\n")
+        # every onboarding step but the owner user done already: the core_config step would set up
+        # integrations of its own (weather, radio, text-to-speech) whose packages are not here
+        os.makedirs(os.path.join(config, ".storage"), exist_ok=True)
+        with open(os.path.join(config, ".storage", "onboarding"), "w") as f:
+            json.dump({"version": 4, "minor_version": 1, "key": "onboarding",
+                       "data": {"done": ["core_config", "analytics", "integration"]}}, f)
 
     @property
     def log_path(self) -> str:
@@ -132,7 +138,7 @@ class HomeAssistant:
         return json.loads(text) if text else None
 
     def onboard(self) -> None:
-        """The owner user, a token, and the remaining onboarding steps (so the frontend opens)."""
+        """The owner user and a token: the last onboarding step (so the frontend opens)."""
         got = self.request("POST", "/api/onboarding/users", {
             "client_id": CLIENT_ID, "name": "Test", "username": "test", "password": "test-password-1",
             "language": "en"}, auth=False)
@@ -140,9 +146,7 @@ class HomeAssistant:
                                                          "code": got["auth_code"], "client_id": CLIENT_ID},
                            auth=False)
         self.token, self.refresh_token = tok["access_token"], tok["refresh_token"]
-        self.request("POST", "/api/onboarding/core_config", {})
-        self.request("POST", "/api/onboarding/analytics", {})
-        self.request("POST", "/api/onboarding/integration", {"client_id": CLIENT_ID, "redirect_uri": CLIENT_ID})
+        assert all(step["done"] for step in self.request("GET", "/api/onboarding", auth=False))
 
     def add_mqtt(self, port: int) -> Dict[str, Any]:
         """The MQTT integration through its config flow, on the broker at 127.0.0.1:port."""
