@@ -27,7 +27,8 @@ def device_page(ha: HomeAssistant, device_id: str, out: Optional[str]) -> str:
             ctx.add_init_script(f"window.localStorage.setItem('hassTokens', {json.dumps(json.dumps(tokens))});")
             page = ctx.new_page()
             page.goto(f"{ha.url}/config/devices/device/{device_id}", timeout=START_S * 1000)
-            row = page.get_by_text("Battery").first  # locators see into the shadow DOM
+            # locators see into the shadow DOM; a hidden table elsewhere may name "Battery" too
+            row = page.locator("text=Battery >> visible=true").first
             row.wait_for(timeout=START_S * 1000)
             page.wait_for_timeout(1000)  # icons and the last rows settle (a picture only)
             if out is not None:
