@@ -8,7 +8,7 @@ import sys
 from typing import Any, Optional, Sequence
 
 from . import __version__, diagnose
-from .cli_support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
+from .cli_support import (CliError, channel, columns, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
                           print_json)
 from .cli_mission import run_mission
 from .cli_watch import cmd_watch, watch_duration
@@ -34,10 +34,12 @@ def cmd_ports(args: argparse.Namespace) -> int:
     if not rows:
         print("no serial ports found")
         return 0
+    table = [("PORT", "USB ID", "DESCRIPTION")]
     for r in rows:
         ids = f"{r['vid']:04x}:{r['pid']:04x}" if r["vid"] is not None else "-"
         mark = f"  [{r['board']}]" if r["board"] else ""
-        print(f"{r['device']}  {ids}  {r['description'] or ''}{mark}")
+        table.append((r["device"], ids, f"{r['description'] or ''}{mark}"))
+    sys.stdout.write(columns(table))
     return 0
 
 

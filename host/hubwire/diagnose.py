@@ -19,11 +19,12 @@ except ImportError:  # pragma: no cover - Windows has no permission groups to ex
 from typing import Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
 from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, MissionCancelled, MissionFailed,
-                     MissionLost, NakError, NoDeviceFound, ProtocolVersionError, Timeout)
+                     MissionLost, NakError, NoDeviceFound, NotCallable, NotReadable, NotWritable,
+                     ProtocolVersionError, Timeout)
 
 __all__ = [
     "ACCESS_WORDS", "ERROR_TYPES", "Holder", "PortOpenError", "access_error", "access_words", "busy_message",
-    "describe_noise", "error_type", "failsafe_warning", "local_path", "no_answer_message", "open_error",
+    "describe_noise", "error_type", "failsafe_warning", "install_hint", "local_path", "no_answer_message", "open_error",
     "open_error_kind", "open_error_message", "permission_message", "port_holders",
 ]
 
@@ -95,7 +96,7 @@ def error_type(exc: BaseException) -> str:
         return str(kind)
     if isinstance(exc, NakError):
         return "Nak"
-    for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
+    for cls in (NotReadable, NotWritable, NotCallable, InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
                 MissionFailed, MissionCancelled, MissionLost):
         if isinstance(exc, cls):
             return cls.__name__
@@ -118,6 +119,12 @@ def access_error(name: str, access: str, need: str) -> Optional[Tuple[str, str]]
     uses = [f"`hubwire {c}`" for c in dict.fromkeys(_COMMANDS[a] for a in access)]
     alternatives = uses[0] if len(uses) == 1 else ", ".join(uses[:-1]) + " or " + uses[-1]
     return kind, f"channel {name!r} cannot be {verb}: its access is {access_words(access)}; use {alternatives}"
+
+
+def install_hint(extra: str) -> str:
+    """How to install one of the package's extras (``mqtt``, ``dashboard``, ``service``): from the
+    clone, since the package is not published on the package index."""
+    return f"pip install './host[{extra}]' in your Hubwire clone (it is not on PyPI)"
 
 
 def failsafe_warning(name: str, failsafe: str, value: str) -> str:

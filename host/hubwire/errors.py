@@ -65,6 +65,23 @@ class InvalidValue(HubwireError, ValueError):
         return nak_name(self.code)
 
 
+class AccessError(HubwireError):
+    """The channel does not allow what was asked: the base of :class:`NotReadable`,
+    :class:`NotWritable` and :class:`NotCallable` (the ``--json`` error types of the same names)."""
+
+
+class NotReadable(AccessError):
+    """A read of a channel that cannot be read (an action, an event)."""
+
+
+class NotWritable(AccessError):
+    """A write to a channel that cannot be written (``rover.battery = 5`` on a read-only channel)."""
+
+
+class NotCallable(AccessError):
+    """A call of a channel that is not an action."""
+
+
 class NakError(HubwireError):
     """The device refused a request with a NAK; ``code`` and ``error`` (its name) tell why."""
 

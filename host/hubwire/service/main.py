@@ -10,6 +10,7 @@ import ssl
 import sys
 from typing import Any, Awaitable, Callable, Dict, List, Optional, Sequence, Tuple
 
+from ..diagnose import install_hint
 from ..errors import HubwireError
 from .broker import BrokerSettings, argv_options, settings_from_args
 from .broker import broker_address as parse_address
@@ -120,7 +121,7 @@ def mqtt_bridge() -> Callable[..., Any]:
         from .mqtt import run_bridge
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --mqtt needs the MQTT client libraries, which this installation "
-                         f"lacks ({e}); install them with: pip install 'hubwire[mqtt]'") from None
+                         f"lacks ({e}); install them with: {install_hint('mqtt')}") from None
     return run_bridge
 
 
@@ -130,7 +131,7 @@ def dashboard(args: argparse.Namespace) -> Callable[[Fleet], Awaitable[Any]]:
         from ..dashboard import address_line, load_token, run_dashboard
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --http needs the dashboard's libraries, which this installation "
-                         f"lacks ({e}); install them with: pip install 'hubwire[dashboard]'") from None
+                         f"lacks ({e}); install them with: {install_hint('dashboard')}") from None
     try:
         token, made = load_token(args.token, args.token_file)
     except (OSError, ValueError) as e:
@@ -148,7 +149,7 @@ def dashboard(args: argparse.Namespace) -> Callable[[Fleet], Awaitable[Any]]:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="hubwire serve: %(message)s" if not args.verbose else "%(asctime)s %(message)s")
+                        format="%(message)s" if not args.verbose else "%(asctime)s %(message)s")  # messages name hubwire serve
     logging.getLogger("hubwire.service").setLevel(logging.INFO)
     sock = args.socket or default_serve_socket()
     try:
@@ -186,7 +187,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from ..cli_support import print_json
+    from ..cli_support import columns, print_json
     from .client import Connection
 
     async def boards() -> List[Any]:
@@ -202,7 +203,8 @@ def cmd_list(args: argparse.Namespace) -> int:
         return 0
     if not rows:
         print("hubwire serve runs, and has found no board yet")
-    for b in rows:
-        sys.stdout.write(f"{b['key']}  {b['name']}  id {b['board_id'] or '-'}  {b['state']}"
-                         f"{'  on ' + b['port'] if b['port'] else ''}\n")
+        return 0
+    table = [("BOARD", "NAME", "BOARD ID", "STATE", "PORT")]
+    table += [(b["key"], b["name"], b["board_id"] or "-", b["state"], b["port"] or "") for b in rows]
+    sys.stdout.write(columns(table))
     return 0

@@ -45,6 +45,12 @@ _DEVICE_TRANSACTIONS = frozenset((m.REQUEST, m.CONTROL))
 _ACKS = frozenset((m.ACK, m.NAK))
 
 
+
+def measured_ms(since_ms: Optional[int]) -> Optional[int]:
+    """A device's measured heartbeat interval, None until measured (its first heartbeat after a start
+    carries 0: there was no previous one)."""
+    return since_ms or None
+
 class SessionCore:
     """One hub-side session with one device, living on ``loop`` (construct it on that loop)."""
 
@@ -130,7 +136,7 @@ class SessionCore:
             hub_counters=link.decoder.counters(),
             device_counters={"crc": hb.crc, "overflow": hb.overflow, "dropped": hb.dropped} if hb else {},
             stats=self.stats.as_dict(),
-            measured_heartbeat_ms=hb.since_ms if hb else None,
+            measured_heartbeat_ms=measured_ms(hb.since_ms if hb else None),
             hub_heartbeat_ms=link.heartbeat_ms,
             hub_heartbeat_since_ms=link.sent_since_ms or None,
         )
