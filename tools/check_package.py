@@ -21,7 +21,7 @@ import dist
 
 LICENSE_ID = "MIT"
 LICENSE_FIRST_LINE = "MIT License"
-UNPUBLISHED = re.compile(r"pip install (-U )?hubwire\b")
+UNPUBLISHED = re.compile(r"pip install (-U )?['\"]?hubwire\b")
 PATH_EDIT = re.compile(r"\bsys\.path\.insert\(")
 SAYS_INSTALL = ("README.md", "library.properties", "host/README.md")
 
