@@ -58,6 +58,8 @@ def cmd_info(args: argparse.Namespace) -> int:
             if d.hub:
                 print(f"\nhub channels {d.name} uses (id: hub id; access: what the board does with it):")
                 print(channel_table(d, hub=True))
+                print(f"status: hubwire commands offer none of them ({d.name} sees them as missing while a command "
+                      "runs); a Python program offers them with hubwire.HubChannels")
     return 0
 
 
