@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from . import diagnose
 from .cli_support import CliError, fmt_value, jsonable, open_device, print_json
@@ -71,8 +71,10 @@ def _watch(dev: Device, evs: Any, args: argparse.Namespace, tty: bool, start: fl
     readable = [c for c in dev.descriptor.channels if c.readable]
     next_at = start
     down_since: Optional[float] = None
+    printed = [_printed(dev, -1)[0]]  # lines the board printed before the view began are not shown
     while duration is None or time.monotonic() - start < duration:
         _print_events(evs, args, tty, events, start, next_at, duration)
+        _print_printed(dev, args, tty, events, start, printed)
         now = time.monotonic()
         if duration is not None and now - start >= duration:
             break
@@ -116,6 +118,29 @@ def _print_events(evs: Any, args: argparse.Namespace, tty: bool, events: List[st
             del events[:-8]
         else:
             print(f"t={t:.3f} event {ev.name}={fmt_value(ev.value)}", flush=True)
+
+
+def _printed(dev: Device, seen: int) -> Tuple[int, List[str]]:
+    """Lines of text the board printed since ``seen`` of them (none through hubwire serve)."""
+    printed = getattr(dev.session, "printed", None)
+    if printed is None:
+        return seen, []
+    count, latest = printed()
+    return count, latest[len(latest) - min(count - seen, len(latest)):] if seen >= 0 and count > seen else []
+
+
+def _print_printed(dev: Device, args: argparse.Namespace, tty: bool, events: List[str], start: float,
+                   printed: List[int]) -> None:
+    printed[0], lines = _printed(dev, printed[0])
+    t = round(time.monotonic() - start, 3)
+    for line in lines:
+        if args.json:
+            print_json({"t": t, "printed": line})
+        elif tty:
+            events.append(f"{t:8.3f}  the board printed: {line}")
+            del events[:-8]
+        else:
+            print(f"t={t:.3f} the board printed: {line}", flush=True)
 
 
 def _read_values(dev: Device, readable: Sequence[Any]) -> Dict[str, Any]:

@@ -147,6 +147,11 @@ class Session:
         """Current :class:`LinkHealth`."""
         return self.core.health()
 
+    def printed(self) -> "tuple[int, list[str]]":
+        """Lines of text the board printed on the line (``Serial.println``): how many in all, and the
+        latest (newest last); the frames they ran into were dropped (``dropped`` in :meth:`health`)."""
+        return self.core.link.printed.recent(self.core.link.decoder)
+
     # ------------------------------------------------------------------------- transactions
 
     def _run(self, aw: Any) -> Any:

@@ -28,6 +28,7 @@ from typing import Any, List, Optional
 from ..transport import Transport
 from ..wire import messages as m
 from ..wire.frame import Frame, FrameDecoder, encode_frame
+from .sketch_hints import LoopWatch, PrintedText
 from .fragments import Reassembler, accepted, encode_message
 from .pacer import Pacer
 from .records import Stats
@@ -97,6 +98,8 @@ class Link:
         #: device hellos heard (threads waiting for a re-link watch it)
         self.hello_count = 0
         self.last_rx = 0.0
+        self.printed = PrintedText(str(transport.url))
+        self.loop_watch = LoopWatch()
         self._peer_hb_ms = 250
         self._hb_counter = 0
         self._last_hb_tx = 0.0
@@ -153,9 +156,12 @@ class Link:
 
     def _on_data(self, data: bytes) -> None:
         frames = self.decoder.feed(data)
+        if self.decoder.text_lines != self.printed.seen:  # a sketch printing on the line
+            self.printed.check(self.decoder, self.linked, time.monotonic())
         if not frames:
             return
         now = time.monotonic()
+        self.loop_watch.heard(now, self.last_rx, self._peer_hb_ms)
         self.last_rx = now
         handle = self.owner.handle
         for f in frames:
@@ -249,6 +255,13 @@ class Link:
         self._hb_timer = self._loss_timer = None
         self._hello_tick()
 
+    def blocked_hint(self) -> str:
+        """What shows a blocked loop() on the device (sketch_hints.LoopWatch), or empty."""
+        return self.loop_watch.hint(self.peer_hb, self._peer_hb_ms)
+
+    def blocked(self) -> bool:
+        return self.loop_watch.gap_ms(self.peer_hb, self._peer_hb_ms) is not None
+
     def _loss_after(self) -> float:
         return LOSS_HEARTBEATS * self._peer_hb_ms / 1000.0
 
@@ -310,6 +323,8 @@ class Link:
 
     def _on_hello(self, f: Frame, now: float) -> None:
         outcome = self._hello_outcome(f)
+        if outcome in (HelloOutcome.FIRST, HelloOutcome.REBOOT):
+            self.loop_watch.started()
         if outcome is not None:
             self.owner.on_hello(outcome)
 
