@@ -83,12 +83,21 @@ def cmd_set(args: argparse.Namespace) -> int:
         held = getattr(dev.session, "remote", None) is not None
         warning = None if ch.failsafe is None or held else diagnose.failsafe_warning(
             ch.name, fmt_value(ch.failsafe), fmt_value(ch.codec.check(value)))
+        note = None if warning else _restart_note(dev)
         if args.json:
             out = {"channel": args.channel, "value": jsonable(ch.codec.check(value)), "ok": True}
-            print_json({**out, "warning": warning} if warning else out)
+            print_json({**out, "warning": warning} if warning else {**out, "note": note} if note else out)
         elif warning:
             sys.stderr.write(f"hubwire: warning: {warning}\n")
+        elif note:
+            sys.stderr.write(f"hubwire: note: {note}\n")
     return 0
+
+
+def _restart_note(dev: Any) -> Optional[str]:
+    """Why a value written or an action's effect does not last (direct connections only)."""
+    started = getattr(dev.session, "started_on_open", None)  # none through hubwire serve
+    return diagnose.RESTART_NOTE if started is not None and started() else None
 
 
 def cmd_call(args: argparse.Namespace) -> int:
@@ -98,10 +107,15 @@ def cmd_call(args: argparse.Namespace) -> int:
         ch = channel(dev, args.action, "c")
         arg = goal_or_argument(ch, args.arg)
         result = dev.call(args.action, arg)
+        note = _restart_note(dev)
         if args.json:
-            print_json({"action": args.action, "result": jsonable(result)})
-        elif result is not None:
-            print(fmt_value(result))
+            out = {"action": args.action, "result": jsonable(result)}
+            print_json({**out, "note": note} if note else out)
+        else:
+            if result is not None:
+                print(fmt_value(result))
+            if note:
+                sys.stderr.write(f"hubwire: note: {note}\n")
     return 0
 
 
@@ -149,7 +163,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_get)
     s = sub.add_parser("set", parents=[common], help="write a channel (JSON for arrays and structs)",
                        description="Write a channel. A channel with a failsafe value goes back to it when "
-                                   "this command's connection ends (a warning says so).")
+                                   "this command's connection ends (a warning says so). A board that restarts "
+                                   "when its port opens (an Uno) forgets the value at the next command (a note "
+                                   "says so): `hubwire serve` keeps it running.")
     s.add_argument("url", help=url_help)
     s.add_argument("channel", help="name of a writable channel (`hubwire info` lists them)")
     s.add_argument("value", help=_VALUE_HELP)

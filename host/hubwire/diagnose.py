@@ -24,7 +24,7 @@ from .errors import (DescriptorError, HubwireError, InvalidValue, LinkLost, Miss
 
 __all__ = [
     "ACCESS_WORDS", "ERROR_TYPES", "Holder", "PortOpenError", "access_error", "access_words", "busy_message",
-    "blocked_loop_hint", "describe_noise", "error_type", "failsafe_warning", "install_hint", "local_path", "no_answer_message", "open_error",
+    "RESTART_NOTE", "blocked_loop_hint", "describe_noise", "error_type", "failsafe_warning", "install_hint", "local_path", "no_answer_message", "open_error",
     "open_error_kind", "open_error_message", "permission_message", "port_holders",
 ]
 
@@ -136,6 +136,12 @@ def install_hint(extra: str) -> str:
     """How to install one of the package's extras (``mqtt``, ``dashboard``, ``service``): from the
     clone, since the package is not published on the package index."""
     return f"pip install './host[{extra}]' in your Hubwire clone (it is not on PyPI)"
+
+
+#: what ``hubwire set`` and ``call`` add when the board restarted as the command opened its port
+RESTART_NOTE = ("the board restarted when this command opened its port (as an Uno does), and will again at the "
+                "next command, which then reads its start-up values; `hubwire serve` keeps it running (commands "
+                "go through it)")
 
 
 def failsafe_warning(name: str, failsafe: str, value: str) -> str:

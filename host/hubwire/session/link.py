@@ -43,6 +43,8 @@ REOPEN_FIRST = 0.1
 REOPEN_MAX = 2.0
 #: the link is lost after this many of the device's heartbeat intervals without a frame
 LOSS_HEARTBEATS = 4
+#: a device silent this long (seconds) after the port opened, then saying hello, has just started
+START_SILENCE = 0.5
 #: the hub's heartbeats go out at this fraction of its announced interval (see the module docstring)
 HEARTBEAT_LEAD = 15 / 16
 #: after this many silent device intervals the hub probes with a hello ...
@@ -99,6 +101,10 @@ class Link:
         self.hello_count = 0
         self.last_rx = 0.0
         self.printed = PrintedText(str(transport.url))
+        self.opened_at = 0.0
+        #: the device's first frame came long after the port opened: it started then (an Uno restarts
+        #: when its port opens, and its bootloader waits) rather than answering at once as a running one does
+        self.started_on_open = False
         self.loop_watch = LoopWatch()
         self._peer_hb_ms = 250
         self._hb_counter = 0
@@ -124,6 +130,7 @@ class Link:
     def open(self) -> None:
         """Open the transport (OSError if it cannot be) and start saying hello."""
         self._open_transport()
+        self.opened_at = time.monotonic()
         self._hello_tick()
 
     def _open_transport(self) -> None:
@@ -162,6 +169,8 @@ class Link:
             return
         now = time.monotonic()
         self.loop_watch.heard(now, self.last_rx, self._peer_hb_ms)
+        if not self.last_rx:
+            self.started_on_open = now - self.opened_at >= START_SILENCE
         self.last_rx = now
         handle = self.owner.handle
         for f in frames:
