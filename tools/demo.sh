@@ -12,7 +12,7 @@
 # `make dashboard-demo` (`tools/demo.sh --dashboard`): the same simulated Uno shown in the browser
 # dashboard instead (`hubwire dashboard`, at the address with a token it prints) until Ctrl-C.
 #
-# Environment: HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
+# Environment: HUBWIRE_BUILD (the build folder, default build), HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
 # default), DEMO_BOOT_DELAY_MS (default 1000), DASHBOARD_PORT (default 8080).
 set -euo pipefail
 # Job control: each command runs in its own process group and owns the terminal while it runs, so
@@ -20,8 +20,9 @@ set -euo pipefail
 set -m
 cd "$(dirname "$0")/.."
 
-SIMUNO=build/simuno/simuno
-ELF=build/uno/Rover/Rover.ino.elf
+BUILD=${HUBWIRE_BUILD:-build}
+SIMUNO=$BUILD/simuno/simuno
+ELF=$BUILD/uno/Rover/Rover.ino.elf
 PY=${HUBWIRE_PYTHON:-.venv/bin/python}
 BOOT_DELAY_MS=${DEMO_BOOT_DELAY_MS:-1000}
 MODE=tour
