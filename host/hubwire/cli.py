@@ -7,7 +7,7 @@ import os
 import sys
 from typing import Any, Optional, Sequence
 
-from . import __version__, diagnose
+from . import __version__, diagnose, interrupt
 from .cli_support import (CliError, channel, columns, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
                           print_json)
 from .cli_mission import run_mission
@@ -122,6 +122,7 @@ def cmd_call(args: argparse.Namespace) -> int:
 _VALUE_HELP = ("the new value: a number (1.5, -2, 0x10), a bool (true/false, 1/0, on/off, yes/no), text as "
                "it is (quote it for the shell), JSON for arrays and structs ('[1, 2, 3]', '{\"x\": 1}')")
 _EPILOG = ("exit status: 0 done, 1 error, 2 usage error, 130 Ctrl-C, 141 output closed (| head).\n"
+           f"Ctrl-C ends any command within {interrupt.ENDS_WITHIN:g} s; a second one at once.\n"
            "With --json an error is one line on stdout: {\"error\": TYPE, \"message\": TEXT}, where TYPE is\n"
            + "".join(f"  {k:<21} {v}\n" for k, v in diagnose.ERROR_TYPES.items()))
 
@@ -203,6 +204,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     _Parser.json_errors = "--json" in argv
     try:
         args = build_parser().parse_args(argv)
+        # Ctrl-C ends a command within interrupt.ENDS_WITHIN at any load; watch and serve end normally
+        interrupt.install(0 if args.command in ("watch", "serve", "dashboard") else 130)
         try:
             status = int(args.fn(args))
         except KeyboardInterrupt:

@@ -5,11 +5,13 @@ import argparse
 import asyncio
 import inspect
 import logging
+import os
 import signal
 import ssl
 import sys
 from typing import Any, Awaitable, Callable, Dict, List, Optional, Sequence, Tuple
 
+from .. import interrupt
 from ..diagnose import install_hint
 from ..errors import HubwireError
 from .broker import BrokerSettings, argv_options, settings_from_args
@@ -22,9 +24,10 @@ __all__ = ["add_commands", "serve", "cmd_serve", "cmd_list", "SHUTDOWN_S"]
 
 log = logging.getLogger("hubwire.service")
 
-#: after SIGTERM / SIGINT the service is gone within this long: the bridge says `offline`, the
-#: boards' links close; whatever has not finished by then is abandoned
-SHUTDOWN_S = 2.0
+#: after SIGTERM / SIGINT the service stops within this long: the bridge says `offline`, the
+#: boards' links close; whatever has not finished by then is abandoned (and the process is gone
+#: within hubwire.interrupt.ENDS_WITHIN whatever happens)
+SHUTDOWN_S = 1.2
 
 
 def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
@@ -172,8 +175,13 @@ def cmd_serve(args: argparse.Namespace) -> int:
     async def main() -> None:
         task = asyncio.current_task()
         loop = asyncio.get_running_loop()
+        def stop() -> None:
+            if not interrupt.arm(0):
+                os._exit(0)  # a second signal: at once
+            task.cancel()  # type: ignore[union-attr]
+
         for sig in (signal.SIGTERM, signal.SIGINT):
-            loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
+            loop.add_signal_handler(sig, stop)
         await serve(fleet, sock, bridge, ready=lambda: print(f"READY {sock}", flush=True),
                     clients=clients, broker=broker)
 
