@@ -102,9 +102,11 @@ class Link:
         self.last_rx = 0.0
         self.printed = PrintedText(str(transport.url))
         self.opened_at = 0.0
-        #: the device's first frame came long after the port opened: it started then (an Uno restarts
-        #: when its port opens, and its bootloader waits) rather than answering at once as a running one does
+        #: the device's first frame came long after the port opened and its first heartbeat counts from
+        #: its boot: it started then (an Uno restarts when its port opens, and its bootloader waits),
+        #: rather than answering at once as a running one does
         self.started_on_open = False
+        self._silent_start = False
         self.loop_watch = LoopWatch()
         self._peer_hb_ms = 250
         self._hb_counter = 0
@@ -170,7 +172,7 @@ class Link:
         now = time.monotonic()
         self.loop_watch.heard(now, self.last_rx, self._peer_hb_ms)
         if not self.last_rx:
-            self.started_on_open = now - self.opened_at >= START_SILENCE
+            self._silent_start = now - self.opened_at >= START_SILENCE
         self.last_rx = now
         handle = self.owner.handle
         for f in frames:
@@ -322,6 +324,8 @@ class Link:
         prev, self.peer_hb = self.peer_hb, hb
         self.peer_hb_at = now
         self.peer_hb_count += 1
+        if self.peer_hb_count == 1:  # a device's counter starts at 1 at boot (PROTOCOL.md 3.2)
+            self.started_on_open = self._silent_start and hb.counter <= 2
         self._beats_since_up += 1
         fresh = prev is None or hb.counter != prev.counter  # not a duplicated frame
         if hb.since_ms == 0 and fresh and self._beats_since_up > 1 and self.linked:
