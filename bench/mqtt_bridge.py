@@ -25,9 +25,8 @@ import time
 import uuid
 from typing import Any, Dict, List
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "host"))
 
-from common import EMULATOR, Child, row, save  # noqa: E402
+from common import EMULATOR, Child, row, save
 
 TICK = os.sysconf("SC_CLK_TCK")
 

@@ -24,13 +24,12 @@ import tempfile
 import time
 from typing import Any, Dict, List
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "host"))
 
-import hubwire  # noqa: E402
-from hubwire.testing import emulator_binary  # noqa: E402
-from hubwire.testing.faultlink import FaultLink, stop_process  # noqa: E402
-from hubwire.testing.faultlink.soak import start_emulator  # noqa: E402
-from hubwire.testing.faultlink.soak_load import retry  # noqa: E402
+import hubwire
+from hubwire.testing import emulator_binary
+from hubwire.testing.faultlink import FaultLink, stop_process
+from hubwire.testing.faultlink.soak import start_emulator
+from hubwire.testing.faultlink.soak_load import retry
 
 BERS = (1e-4, 3e-4, 1e-3, 2e-3, 3e-3)
 DROP = 0.01

@@ -1,7 +1,9 @@
 """Checks on what a user installs, run by tools/check_manifests.py (offline).
 
 - LICENSE: present at the root (Arduino's linter, rule LD002), MIT, the same licence that
-  library.json and host/pyproject.toml declare.
+  library.json and host/pyproject.toml declare; host/LICENSE (the Python package's) the same text.
+- No tracked symlinks (the Library Manager's indexer and arduino-lint reject them), and no
+  `sys.path.insert` in tracked Python (scripts and tests import the installed package).
 - library.json's export.include lists exactly the library (tools/dist.py LIBRARY_PATHS); the tree
   packed as `pio pkg pack` packs it and the Arduino IDE zip hold nothing else (offending paths named).
 - The README's install instructions name things that exist: no `pip install hubwire` from a
@@ -12,13 +14,15 @@
 import json
 import os
 import re
+import subprocess
 import tempfile
 
 import dist
 
 LICENSE_ID = "MIT"
 LICENSE_FIRST_LINE = "MIT License"
-UNPUBLISHED = re.compile(r"pip install (-U )?hubwire\b")
+UNPUBLISHED = re.compile(r"pip install (-U )?['\"]?hubwire\b")
+PATH_EDIT = re.compile(r"\bsys\.path\.insert\(")
 SAYS_INSTALL = ("README.md", "library.properties", "host/README.md")
 
 
@@ -34,6 +38,14 @@ def check_license(ck):
     with open(ck.path("library.json"), encoding="utf-8") as f:
         if json.load(f).get("license") != LICENSE_ID:
             ck.error("library.json", f"license must be {LICENSE_ID}")
+    host_license = ck.path("host", "LICENSE")
+    if os.path.lexists(host_license):
+        if not os.path.isfile(host_license):
+            ck.error("host/LICENSE", "must be a file with the same text as LICENSE")
+        else:
+            with open(host_license, encoding="utf-8") as f:
+                if f.read() != text:
+                    ck.error("host/LICENSE", "must be the same text as LICENSE")
     pyproject = ck.path("host", "pyproject.toml")
     if os.path.exists(pyproject):
         with open(pyproject, encoding="utf-8") as f:
@@ -84,8 +96,24 @@ def check_readme(ck):
                               f"-t upload` uploads {built} (platformio.ini src_dir)")
 
 
+def check_tree(ck):
+    try:
+        listing = subprocess.run(["git", "-C", ck.root, "ls-files", "-s"], capture_output=True, text=True,
+                                 check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        ck.note("not a git checkout: tracked symlinks and sys.path edits not checked")
+        return
+    for line in listing.splitlines():
+        info, rel = line.split("\t", 1)
+        if info.startswith("120000 "):
+            ck.error(rel, "is a symlink: the Library Manager's indexer and arduino-lint reject them")
+        elif rel.endswith(".py") and os.path.isfile(ck.path(rel)) and PATH_EDIT.search(read(ck, rel)):
+            ck.error(rel, "edits sys.path: import the installed package (make setup) or pass PYTHONPATH")
+
+
 def check_all(ck, data):
     check_license(ck)
+    check_tree(ck)
     if data is not None:
         check_export(ck, data)
     check_readme(ck)

@@ -4,7 +4,8 @@
 # Starts build/simuno/simuno (real AVR firmware in simavr, its UART on a pty that resets the board
 # when opened, with a bootloader delay like a real Uno), walks through every kind of message with
 # tools/demo_tour.py (reads, acked writes, a stream following the motors, a refused value, an
-# action, events once each, link health), then runs `hubwire watch`. Watch runs until Ctrl-C on a
+# action, events once each, a failsafe, link health), then runs `hubwire watch` while the bumper is
+# pressed every 2 s. docs/DEMO.md says exactly what it shows and what it does not. Watch runs until Ctrl-C on a
 # terminal; about 15 s when stdin or stdout is not a terminal. Always stops the simulator and
 # removes the link; Ctrl-C is a normal way to end (exit status 0). Needs `make simuno uno-firmware` (and `make setup`
 # for the venv) first; `make demo` does all of it.
@@ -12,7 +13,7 @@
 # `make dashboard-demo` (`tools/demo.sh --dashboard`): the same simulated Uno shown in the browser
 # dashboard instead (`hubwire dashboard`, at the address with a token it prints) until Ctrl-C.
 #
-# Environment: HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
+# Environment: HUBWIRE_BUILD (the build folder, default build), HUBWIRE_PYTHON (default .venv/bin/python), DEMO_DURATION (seconds, overrides the
 # default), DEMO_BOOT_DELAY_MS (default 1000), DASHBOARD_PORT (default 8080).
 set -euo pipefail
 # Job control: each command runs in its own process group and owns the terminal while it runs, so
@@ -20,8 +21,9 @@ set -euo pipefail
 set -m
 cd "$(dirname "$0")/.."
 
-SIMUNO=build/simuno/simuno
-ELF=build/uno/Rover/Rover.ino.elf
+BUILD=${HUBWIRE_BUILD:-build}
+SIMUNO=$BUILD/simuno/simuno
+ELF=$BUILD/uno/Rover/Rover.ino.elf
 PY=${HUBWIRE_PYTHON:-.venv/bin/python}
 BOOT_DELAY_MS=${DEMO_BOOT_DELAY_MS:-1000}
 MODE=tour
@@ -121,7 +123,7 @@ cat <<EOF
           Opening the port resets the board and its bootloader holds it for
           ${BOOT_DELAY_MS} ms, like a real Uno; the hub rides through that by itself.
 
- First a tour of every kind of message (tools/demo_tour.py), then
+ First a tour of what Rover uses (tools/demo_tour.py; docs/DEMO.md), then
  \`hubwire watch\` with live values, events and link health, $how_long.
 
  With a real board: upload examples/Rover to an Uno (Arduino IDE or arduino-cli),
@@ -139,8 +141,13 @@ echo "\$ python tools/demo_tour.py $link"
 "$PY" tools/demo_tour.py "$link" || status=$?
 if [ "$status" -eq 0 ]; then
   echo
-  echo "\$ hubwire watch $link ${duration_args[*]}"
+  echo "\$ hubwire watch $link ${duration_args[*]}      (the bumper is pressed and released every 2 s)"
+  # something moving on the board's side: simuno toggles the bumper's pin on SIGUSR2
+  ( set +m; while kill -USR2 "$simuno_pid" 2>/dev/null; do sleep 2; done ) &
+  presser=$!
   "$PY" -m hubwire watch "$link" "${duration_args[@]}" || status=$?
+  kill "$presser" 2>/dev/null || true
+  wait "$presser" 2>/dev/null || true
 fi
 if [ "$status" -ne 0 ] && [ "$status" -ne 130 ]; then
   echo "demo: hubwire exited with status $status; simulator log:" >&2

@@ -15,6 +15,7 @@ import time
 from typing import Any, Callable, List
 
 import hubwire
+from hubwire.testing import tap_of, tapped
 
 PAUSE = [0.6]  # seconds between steps, so a person can follow (--pause)
 
@@ -53,6 +54,14 @@ def imu_while_driving(rover: hubwire.Device, left: float, right: float, samples:
     show('for imu in rover.stream("imu", hz=20)',
          f"{len(got)} samples, last ax={last.ax:.2f} ay={last.ay:.2f} gyro z={last.gyro[2]}")
     return got
+
+
+def read_or_none(rover: hubwire.Device, name: str) -> Any:
+    """A read, or None while the link is coming back."""
+    try:
+        return rover.read(name)
+    except hubwire.HubwireError:
+        return None
 
 
 def tour(rover: hubwire.Device, check: Callable[[bool, str], None]) -> None:
@@ -99,6 +108,21 @@ def tour(rover: hubwire.Device, check: Callable[[bool, str], None]) -> None:
     check(len(seen) == queued == 3, f"expected 3 events once each, got {len(seen)}")
     check([e.value for e in seen] == [True, False, True], "events arrive in the order they were emitted")
 
+    title("A failsafe: the hub falls silent, the board stops the motors by itself")
+    rover.left, rover.right = 0.5, 0.5
+    before = rover.failsafes
+    show("rover.left, rover.right = 0.5, 0.5", f"driving; failsafes so far: {before}")
+    tap = tap_of(rover)
+    tap.paused = True  # nothing the hub writes reaches the board: no heartbeats, as if it hung
+    show("(the hub stops writing for 2.5 s)", "the board misses 4 heartbeats (1 s), applies the failsafe values")
+    time.sleep(2.5)
+    tap.paused = False
+    after = settled(lambda: read_or_none(rover, "failsafes"), lambda v: v is not None and v > before, 10.0)
+    left = settled(lambda: read_or_none(rover, "left"), lambda v: v is not None, 10.0)
+    show("rover.failsafes, rover.left", f"{after}, {left}: the link came back by itself, the motors stopped")
+    check(after is not None and after > before and left == 0.0, f"the failsafe should have stopped the motors: "
+                                                                 f"failsafes {before} -> {after}, left {left}")
+
     title("Link health: heartbeats both ways, error counters of both receivers")
     h = rover.health()
     show("rover.health()", f"state {h.state}, device heartbeat every {h.device_heartbeat_ms} ms, "
@@ -122,7 +146,7 @@ def main(argv: Any = None) -> int:
             print(f"  !! {why}", flush=True)
 
     show(f'rover = hubwire.connect("{args.port}")', "rides through the reset, handshakes, discovers")
-    with hubwire.connect(args.port) as rover:
+    with hubwire.connect(transport=tapped(args.port)) as rover:  # tapped: for the failsafe step
         tour(rover, check)
     if failures:
         print(f"\ndemo tour: {len(failures)} step(s) did not do what the protocol promises", file=sys.stderr)

@@ -100,7 +100,6 @@ def zip_problems(path):
 
 def pio_pack(root, out):
     """`pio pkg pack` of the tree, offline; returns the tarball's path."""
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from check_manifests import load_platformio  # stubs the SPDX list
 
     if load_platformio(online=False)[0] is None:

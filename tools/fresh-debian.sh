@@ -74,8 +74,10 @@ for v in SSL_CERT_FILE PIP_CERT REQUESTS_CA_BUNDLE PIP_FIND_LINKS; do
   bind_ro "$p"
 done
 
-# the clone: the committed HEAD, as a user would get it
+# the clone: the committed HEAD, as a user would get it, in root's home (mode 0700 as on any
+# Debian system: user nobody cannot read it, which the tests must not depend on)
 WORK=/root/hubwire
+chmod 700 "$DIR/root"
 git init -q "$DIR$WORK"
 git -C "$DIR$WORK" fetch -q "$SRC" "$SHA"
 git -C "$DIR$WORK" checkout -q --detach FETCH_HEAD

@@ -6,15 +6,15 @@ asyncio flavour. Both run on the same session core (:mod:`hubwire.session`).
 from __future__ import annotations
 
 from .errors import (DescriptorError, HubChannelError, HubwireError, InvalidValue, LinkLost, MissionCancelled,
-                     MissionError, MissionFailed, MissionLost, NakError, NoDeviceFound,
-                     ProtocolVersionError, StreamEnded, Timeout, UnknownBoard)
+                     MissionError, MissionFailed, MissionLost, NakError, NoDeviceFound, NotCallable, NotReadable,
+                     NotWritable, ProtocolVersionError, StreamEnded, Timeout, UnknownBoard)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "HubwireError", "Timeout", "NakError", "DescriptorError", "LinkLost", "ProtocolVersionError",
     "NoDeviceFound", "InvalidValue", "StreamEnded", "HubChannelError", "MissionError", "MissionFailed",
-    "MissionCancelled", "MissionLost", "UnknownBoard", "__version__",
+    "MissionCancelled", "MissionLost", "NotReadable", "NotWritable", "NotCallable", "UnknownBoard", "__version__",
 ]
 
 from .descriptor import Channel, Descriptor, parse_descriptor  # noqa: E402

@@ -22,7 +22,7 @@ from .errors import ERROR_TYPES, HubwireError, error_type
 
 __all__ = [
     "ACCESS_WORDS", "ERROR_TYPES", "Holder", "PortOpenError", "access_error", "access_words", "busy_message",
-    "describe_noise", "error_type", "failsafe_warning", "local_path", "no_answer_message", "open_error",
+    "RESTART_NOTE", "blocked_loop_hint", "describe_noise", "error_type", "failsafe_warning", "install_hint", "local_path", "no_answer_message", "open_error",
     "open_error_kind", "open_error_message", "permission_message", "port_holders",
 ]
 
@@ -75,6 +75,29 @@ def access_error(name: str, access: str, need: str) -> Optional[Tuple[str, str]]
     uses = [f"`hubwire {c}`" for c in dict.fromkeys(_COMMANDS[a] for a in access)]
     alternatives = uses[0] if len(uses) == 1 else ", ".join(uses[:-1]) + " or " + uses[-1]
     return kind, f"channel {name!r} cannot be {verb}: its access is {access_words(access)}; use {alternatives}"
+
+
+def blocked_loop_hint(gap_ms: Optional[int], declared_ms: Optional[int], silent: bool = False) -> str:
+    """What to add to a lost link or an unanswered request when the device's heartbeats come far
+    apart (``gap_ms``: measured by the device, or with ``silent`` a silence the hub heard;
+    ``declared_ms``: the interval its hello announced): its sketch does not call ``hub.update()``
+    often enough, most often because of ``delay()`` in ``loop()``. Empty otherwise."""
+    if not gap_ms or not declared_ms or gap_ms < 3 * declared_ms:
+        return ""
+    seen = f"silent for {gap_ms} ms at a time" if silent else f"heartbeat every {gap_ms} ms"
+    return f"; the board's loop() seems blocked ({seen}, declared {declared_ms} ms): avoid delay() in loop()"
+
+
+def install_hint(extra: str) -> str:
+    """How to install one of the package's extras (``mqtt``, ``dashboard``, ``service``): from the
+    clone, since the package is not published on the package index."""
+    return f"pip install './host[{extra}]' in your Hubwire clone (it is not on PyPI)"
+
+
+#: what ``hubwire set`` and ``call`` add when the board restarted as the command opened its port
+RESTART_NOTE = ("the board restarted when this command opened its port (as an Uno does), and will again at the "
+                "next command, which then reads its start-up values; `hubwire serve` keeps it running (commands "
+                "go through it)")
 
 
 def failsafe_warning(name: str, failsafe: str, value: str) -> str:

@@ -89,6 +89,23 @@ class InvalidValue(HubwireError, ValueError):
         return nak_name(self.code)
 
 
+class AccessError(HubwireError):
+    """The channel does not allow what was asked: the base of :class:`NotReadable`,
+    :class:`NotWritable` and :class:`NotCallable` (the ``--json`` error types of the same names)."""
+
+
+class NotReadable(AccessError):
+    """A read of a channel that cannot be read (an action, an event)."""
+
+
+class NotWritable(AccessError):
+    """A write to a channel that cannot be written (``rover.battery = 5`` on a read-only channel)."""
+
+
+class NotCallable(AccessError):
+    """A call of a channel that is not an action."""
+
+
 class NakError(HubwireError):
     """The device refused a request with a NAK; ``code`` and ``error`` (its name) tell why."""
 
@@ -173,8 +190,8 @@ def error_type(exc: BaseException) -> str:
         return str(kind)
     if isinstance(exc, NakError):
         return "Nak"
-    for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
-                MissionFailed, MissionCancelled, MissionLost):
+    for cls in (NotReadable, NotWritable, NotCallable, InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError,
+                ProtocolVersionError, MissionFailed, MissionCancelled, MissionLost):
         if isinstance(exc, cls):
             return cls.__name__
     if isinstance(exc, KeyError):

@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any, Optional
 
 from .descriptor import Channel, Descriptor
-from .errors import HubwireError, NakError
+from .diagnose import access_words
+from .errors import HubwireError, NakError, NotCallable, NotReadable, NotWritable
 from .text import clip, clip_list, show
 from .wire import messages as m
 from .wire.frame import Frame
@@ -26,10 +27,14 @@ def channel(desc: Optional[Descriptor], name: str) -> Channel:
     return ch
 
 
+def _lacking(ch: Channel, verb: str) -> str:
+    return f"channel {ch.name!r} cannot be {verb}: its access is {access_words(ch.access)}"
+
+
 def readable(desc: Optional[Descriptor], name: str) -> Channel:
     ch = channel(desc, name)
     if not ch.readable:
-        raise HubwireError(f"channel {name!r} is not readable (access {ch.access!r})")
+        raise NotReadable(_lacking(ch, "read"))
     return ch
 
 
@@ -37,7 +42,7 @@ def write_payload(desc: Optional[Descriptor], name: str, value: Any) -> "tuple[C
     """Channel and payload of a write, type and range checked (InvalidValue)."""
     ch = channel(desc, name)
     if not ch.writable:
-        raise HubwireError(f"channel {name!r} is not writable (access {ch.access!r})")
+        raise NotWritable(_lacking(ch, "written"))
     return ch, ch.codec.encode(ch.check(value))
 
 
@@ -59,7 +64,6 @@ def _argument(ch: Channel, name: str, arg: Any) -> bytes:
 
 def mission_start(desc: Optional[Descriptor], name: str, goal: Any) -> "tuple[Channel, bytes]":
     """Channel and ``C`` payload that start mission ``name`` with ``goal`` (None for no goal)."""
-    from .diagnose import access_words
     from .wire.missions import start_payload
 
     ch = channel(desc, name)
@@ -76,7 +80,7 @@ def call_payload(desc: Optional[Descriptor], name: str, arg: Any) -> "tuple[Chan
     if ch.mission:
         raise not_a_mission(ch)
     if not ch.callable:
-        raise HubwireError(f"channel {name!r} is not callable (access {ch.access!r})")
+        raise NotCallable(_lacking(ch, "called"))
     return ch, _argument(ch, name, arg)
 
 

@@ -7,7 +7,10 @@ from typing import Any, Dict, List, Optional
 
 from .errors import NoDeviceFound
 
-__all__ = ["find_port", "KNOWN_USB_VIDS", "serial_ports", "board_kind", "board_ports"]
+__all__ = ["find_port", "KNOWN_USB_VIDS", "serial_ports", "board_kind", "board_ports", "PYTHON_ADVICE"]
+
+#: the last sentence of find_port's error when no board is found (the command line says its own)
+PYTHON_ADVICE = "Pass the port explicitly, e.g. connect('/dev/ttyACM0')."
 
 #: USB vendor ids of boards and USB-serial bridges commonly used with microcontrollers
 KNOWN_USB_VIDS: Dict[int, str] = {
@@ -61,7 +64,7 @@ def find_port() -> str:
         raise NoDeviceFound(
             "no microcontroller board found: no serial port has a known USB id "
             f"({', '.join(f'{v:04x} {n}' for v, n in KNOWN_USB_VIDS.items())}). Ports seen: {seen}. "
-            "Pass the port explicitly, e.g. connect('/dev/ttyACM0').")
+            + PYTHON_ADVICE)
     raise NoDeviceFound(
         f"{len(matches)} boards found, pass the one to use explicitly: "
         + "; ".join(f"{_port_line(p)} [{board_kind(p)}]" for p in matches))

@@ -58,8 +58,12 @@ def test_watch_plain_lines_ends_by_itself(emulator: Emulator, cache_dir: str) ->
     lines = r.stdout.splitlines()
     values = [ln for ln in lines if " left=" in ln]
     health = [ln for ln in lines if " link state=ready" in ln]
-    assert len(values) >= 4 and len(health) == len(values)
+    assert len(values) >= 1 and len(health) >= 1
     assert "heartbeat_age_ms=" in health[-1] and "hub_errors=crc:0" in health[-1]
+    # changes only: a line is printed when it differs from the one before (6 refreshes ran)
+    for kind in (values, health):
+        bodies = [re.sub(r"^t=\S+ |heartbeat_age_ms=\d+ ", "", ln) for ln in kind]
+        assert all(a != b for a, b in zip(bodies, bodies[1:])), kind
     # the device's own measure of its heartbeat interval: never under the 250 ms it announced
     beat = int(re.search(r"measured_heartbeat_ms=(\d+)", health[-1]).group(1))  # type: ignore[union-attr]
     assert beat >= 250
@@ -108,11 +112,15 @@ def test_watch_on_a_terminal_redraws_and_ctrl_c_ends_cleanly(emulator: Emulator,
     out = b""
     try:
         deadline = time.monotonic() + 15
-        while out.count(b"\x1b[H\x1b[2J") < 2 and time.monotonic() < deadline:
+        redraws = re.compile(rb"\x1b\[(\d+)F")  # back up to the first line of the drawing, no clearing
+        while len(redraws.findall(out)) < 2 and time.monotonic() < deadline:
             r, _, _ = select.select([master], [], [], 0.5)
             if r:
                 out += os.read(master, 65536)
-        assert out.count(b"\x1b[H\x1b[2J") >= 2, out[-500:]  # redrawn in place, no --duration needed
+        assert len(redraws.findall(out)) >= 2, out[-500:]  # redrawn in place, no --duration needed
+        assert b"\x1b[2J" not in out and b"\x1b[H" not in out  # the screen (and scrollback) above stays
+        first = out[:redraws.search(out).start()]  # type: ignore[union-attr]
+        assert int(redraws.findall(out)[0]) == first.count(b"\n")  # exactly over the previous drawing
         text = out.decode(errors="replace")
         assert "battery" in text and "link ready" in text and "Ctrl-C" in text
         p.send_signal(signal.SIGINT)

@@ -88,22 +88,60 @@ def chatty_port() -> Iterator[Port]:
 
 # --------------------------------------------------------------------------- opening a port
 
-def test_no_permission_says_to_join_dialout(port: Port) -> None:
+# The command as user nobody, every module it may import loaded first: nobody may not be able to
+# read the clone (root's home is 0700), and an import after the switch would fail for that reason.
+AS_NOBODY = """
+import importlib, os, pkgutil, sys
+import hubwire, hubwire.cli, serial.serialposix
+assert hubwire.__file__.startswith(sys.argv[1]), hubwire.__file__
+for m in pkgutil.walk_packages(hubwire.__path__, "hubwire.", onerror=lambda name: None):
+    if not m.name.startswith(("hubwire.dashboard", "hubwire.__main__")):
+        try:
+            importlib.import_module(m.name)
+        except ImportError:
+            pass  # an optional extra that is not installed: the command does not use it
+hubwire.cli.build_parser().parse_args(sys.argv[2:])
+os.setgroups([]); os.setgid(65534); os.setuid(65534)
+sys.exit(hubwire.cli.main(sys.argv[2:]))
+"""
+
+@pytest.fixture(params=["here", "private"])
+def package_path(request: Any, tmp_path: Any) -> Optional[str]:
+    """Where the child imports hubwire from: this checkout, or a copy in a folder only its owner can
+    enter (a clone in root's home, mode 0700), so the result cannot depend on where the clone lives."""
+    if request.param == "here":
+        return None
+    import shutil
+
+    import hubwire
+
+    private = tmp_path / "private"
+    shutil.copytree(os.path.dirname(hubwire.__file__), private / "hubwire",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    os.chmod(private, 0o700)
+    return str(private)
+
+
+def test_no_permission_says_to_join_dialout(port: Port, package_path: Optional[str]) -> None:
+    env = dict(os.environ)
+    if package_path is not None:
+        env["PYTHONPATH"] = package_path
     if os.geteuid() == 0:
-        # root opens anything: run the command as nobody (after Python and hubwire are loaded)
-        code = ("import os, sys, gettext, locale, select, serial.serialposix, hubwire.cli, hubwire.session; "
-                "hubwire.cli.build_parser().parse_args(sys.argv[1:]); "
-                "os.setgroups([]); os.setgid(65534); os.setuid(65534); sys.exit(hubwire.cli.main(sys.argv[1:]))")
-        cmd = [sys.executable, "-c", code]
+        # root opens anything: run the command as nobody, with every module it may use loaded first
+        # (nobody cannot read a clone in root's home)
+        code = AS_NOBODY
+        cmd = [sys.executable, "-c", code, package_path or os.path.dirname(os.path.dirname(__file__))]
     else:
         os.chmod(port.path, 0)
         cmd = CLI
-    r = subprocess.run([*cmd, "info", port.path, "--no-cache"], capture_output=True, text=True, timeout=30)
+    r = subprocess.run([*cmd, "info", port.path, "--no-cache"], capture_output=True, text=True, timeout=30,
+                       env=env)
     assert r.returncode == 1
     assert r.stderr == (f"hubwire: no permission to open {port.path}: serial ports belong to the 'dialout' "
                         "group. Join it with `sudo usermod -aG dialout $USER`, then log out and back in (a new "
                         "login is needed for the group to apply)\n")
-    r = subprocess.run([*cmd, "info", port.path, "--no-cache", "--json"], capture_output=True, text=True, timeout=30)
+    r = subprocess.run([*cmd, "info", port.path, "--no-cache", "--json"], capture_output=True, text=True, timeout=30,
+                       env=env)
     assert json_error(r)["error"] == "PermissionDenied"
 
 

@@ -16,11 +16,12 @@ def test_tour_passes_every_step(emulator) -> None:  # type: ignore[no-untyped-de
     assert "every step did what the protocol promises" in out
     # the steps a newcomer is promised, in order
     marks = ["Discovery", "Reads", "Writes with ACK", "Values refused", "events delivered exactly once",
-             "Link health"]
+             "A failsafe", "Link health"]
     positions = [out.index(m) for m in marks]
     assert positions == sorted(positions)
     assert out.count("  event   ->  bumper = ") == 3
     assert "InvalidValue OUT_OF_RANGE" in out
+    assert "the link came back by itself, the motors stopped" in out  # failsafes counted up, left is 0
 
 
 def test_tour_exits_nonzero_without_a_board(tmp_path) -> None:  # type: ignore[no-untyped-def]

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 import math
 import time
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple
@@ -24,6 +25,8 @@ if TYPE_CHECKING:
     from .reply import Reply
 
 __all__ = ["BoardBridge"]
+
+log = logging.getLogger("hubwire.mqtt")
 
 _NEEDS = {"set": "w", "call": "c", "read": "r"}
 
@@ -124,6 +127,9 @@ class BoardBridge:
                 box.dirty[topic] = None
         if force:
             box.wake.set()
+        if new != self._discovery:
+            log.info("hubwire serve: MQTT: Home Assistant discovery for %s: %d entities under %s/", self.key,
+                     len(new), cfg.discovery_prefix)
         self._discovery = new
 
     # ------------------------------------------------------------------------------ states

@@ -181,3 +181,47 @@ def argv_options() -> List[Tuple[Tuple[str, ...], Dict[str, Any]]]:
         (("--mqtt-reply-prefix",), dict(action="append", default=[], metavar="PREFIX",
                                         help="topics replies may go to (repeatable; default: the bridge's prefix)")),
     ]
+
+
+#: a broker that stays unreachable is mentioned again at most this often (seconds)
+SAY_AGAIN_S = 60.0
+
+
+class BrokerTrouble:
+    """What the bridge logs about reaching its broker: the first failure of a streak with a hint of
+    what to do, then at most one line every :data:`SAY_AGAIN_S` while it keeps trying (the retries in
+    between at debug level); the connection itself at info level (``hubwire serve -v``)."""
+
+    def __init__(self, log: Any, where: str, retry_s: float) -> None:
+        self.log = log
+        self.where = where
+        self.retry_s = retry_s
+        self.failures = 0
+        self._since: Optional[float] = None
+        self._said_at: Optional[float] = None
+
+    def failed(self, error: BaseException, answered: bool, now: float) -> None:
+        """A connection attempt failed; ``answered``: the broker itself refused (a password, a
+        certificate), rather than nothing answering."""
+        self.failures += 1
+        if self._since is None:
+            self._since = now
+        if self._said_at is not None and now - self._said_at < SAY_AGAIN_S:
+            self.log.debug("hubwire serve: MQTT: broker %s: %s", self.where, error)
+            return
+        still = f" (still, {self.failures} tries in {now - self._since:.0f} s)" if self._said_at is not None else ""
+        self._said_at = now
+        if answered:
+            self.log.warning("hubwire serve: MQTT: the broker at %s refused the connection: %s%s; trying again "
+                             "every %g s", self.where, error, still, self.retry_s)
+        else:
+            self.log.warning("hubwire serve: MQTT: no MQTT broker answers at %s (%s)%s: start one (Debian: "
+                             "sudo apt install mosquitto, which listens on localhost:1883) or point --mqtt HOST:PORT "
+                             "at yours; trying again every %g s", self.where, error, still, self.retry_s)
+
+    def connected(self, service_id: str, now: float) -> None:
+        after = f" after {self.failures} failed tries in {now - self._since:.0f} s" if self._since is not None else ""
+        (self.log.warning if after else self.log.info)(
+            "hubwire serve: MQTT: connected to the broker at %s as service %r%s", self.where, service_id, after)
+        self.failures = 0
+        self._since = self._said_at = None

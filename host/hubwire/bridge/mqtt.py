@@ -13,6 +13,7 @@ import logging
 import secrets
 import socket
 import ssl
+import time
 from typing import TYPE_CHECKING, Any, AsyncIterator, Dict, List, Optional, Protocol, Sequence, Set, Tuple
 
 import aiomqtt
@@ -21,6 +22,7 @@ from paho.mqtt.properties import Properties
 
 from . import mission_topics
 from .board import BoardBridge
+from .broker import BrokerTrouble
 from .inbound import Inbound
 from .reply import Reply
 from .outbox import Outbox
@@ -163,7 +165,7 @@ class Bridge:
         #: keys this service published that a board no longer has (their retained topics are cleared)
         self.retired = Retired(self.topics, config.service_id)
         self._tasks: Set["asyncio.Task[Any]"] = set()
-        self._failing = False
+        self.trouble = BrokerTrouble(log, f"{self.host}:{self.port}", config.reconnect_s)
         #: messages over MAX_PACKET that came although the broker was told (dropped unread)
         self.oversized = 0
         #: commands refused for their reply topic; when that was last logged
@@ -182,10 +184,7 @@ class Bridge:
                 try:
                     await self._session()
                 except aiomqtt.MqttError as e:
-                    # the first failure of a streak shows without -v (a refused password, a bad certificate)
-                    (log.info if self._failing else log.warning)("hubwire serve: MQTT: broker %s:%d: %s",
-                                                                 self.host, self.port, e)
-                    self._failing = True
+                    self.trouble.failed(e, isinstance(e, aiomqtt.MqttCodeError), time.monotonic())
                 self.client = None
                 self.connected.clear()
                 await asyncio.sleep(self.config.reconnect_s)
@@ -213,7 +212,7 @@ class Bridge:
                                   properties=connect) as client:
             self.client = client
             self.connections += 1
-            self._failing = False
+            self.trouble.connected(self.config.service_id, time.monotonic())
             await client.publish(status, ONLINE, qos=1, retain=True)
             for f in self.topics.command_filters() + mission_topics.filters(self.topics):
                 await client.subscribe(f, qos=1)

@@ -8,7 +8,8 @@ import sys
 from typing import Any, Optional, Sequence
 
 from .. import __version__, diagnose
-from .support import (CliError, channel, channel_json, fmt_value, goal_or_argument, jsonable, open_device,
+from . import interrupt
+from .support import (CliError, channel, channel_json, columns, fmt_value, goal_or_argument, jsonable, open_device,
                           print_json)
 from .mission import run_mission
 from .watch import cmd_watch, watch_duration
@@ -32,10 +33,12 @@ def cmd_ports(args: argparse.Namespace) -> int:
     if not rows:
         print("no serial ports found")
         return 0
+    table = [("PORT", "USB ID", "DESCRIPTION")]
     for r in rows:
         ids = f"{r['vid']:04x}:{r['pid']:04x}" if r["vid"] is not None else "-"
         mark = f"  [{r['board']}]" if r["board"] else ""
-        print(f"{r['device']}  {ids}  {r['description'] or ''}{mark}")
+        table.append((r["device"], ids, f"{r['description'] or ''}{mark}"))
+    sys.stdout.write(columns(table))
     return 0
 
 
@@ -57,6 +60,9 @@ def cmd_info(args: argparse.Namespace) -> int:
             if d.hub:
                 print(f"\nhub channels {d.name} uses (id: hub id; access: what the board does with it):")
                 print(channel_table(d, hub=True))
+                if providers is None:
+                    print(f"status: hubwire commands offer none of them ({d.name} sees them as missing while a command "
+                          "runs); a Python program offers them with hubwire.HubChannels")
             if providers is not None:
                 from ..client.hub_client import status_lines
 
@@ -84,12 +90,21 @@ def cmd_set(args: argparse.Namespace) -> int:
         held = getattr(dev.session, "remote", None) is not None
         warning = None if ch.failsafe is None or held else diagnose.failsafe_warning(
             ch.name, fmt_value(ch.failsafe), fmt_value(ch.codec.check(value)))
+        note = None if warning else _restart_note(dev)
         if args.json:
             out = {"channel": args.channel, "value": jsonable(ch.codec.check(value)), "ok": True}
-            print_json({**out, "warning": warning} if warning else out)
+            print_json({**out, "warning": warning} if warning else {**out, "note": note} if note else out)
         elif warning:
             sys.stderr.write(f"hubwire: warning: {warning}\n")
+        elif note:
+            sys.stderr.write(f"hubwire: note: {note}\n")
     return 0
+
+
+def _restart_note(dev: Any) -> Optional[str]:
+    """Why a value written or an action's effect does not last (direct connections only)."""
+    started = getattr(dev.session, "started_on_open", None)  # none through hubwire serve
+    return diagnose.RESTART_NOTE if started is not None and started() else None
 
 
 def cmd_call(args: argparse.Namespace) -> int:
@@ -99,16 +114,22 @@ def cmd_call(args: argparse.Namespace) -> int:
         ch = channel(dev, args.action, "c")
         arg = goal_or_argument(ch, args.arg)
         result = dev.call(args.action, arg)
+        note = _restart_note(dev)
         if args.json:
-            print_json({"action": args.action, "result": jsonable(result)})
-        elif result is not None:
-            print(fmt_value(result))
+            out = {"action": args.action, "result": jsonable(result)}
+            print_json({**out, "note": note} if note else out)
+        else:
+            if result is not None:
+                print(fmt_value(result))
+            if note:
+                sys.stderr.write(f"hubwire: note: {note}\n")
     return 0
 
 
 _VALUE_HELP = ("the new value: a number (1.5, -2, 0x10), a bool (true/false, 1/0, on/off, yes/no), text as "
                "it is (quote it for the shell), JSON for arrays and structs ('[1, 2, 3]', '{\"x\": 1}')")
 _EPILOG = ("exit status: 0 done, 1 error, 2 usage error, 130 Ctrl-C, 141 output closed (| head).\n"
+           f"Ctrl-C ends any command within {interrupt.ENDS_WITHIN:g} s; a second one at once.\n"
            "With --json an error is one line on stdout: {\"error\": TYPE, \"message\": TEXT} (a Nak adds \"nak\",\n"
            "\"code\" and \"channel\", an InvalidValue \"code\"), where TYPE is\n"
            + "".join(f"  {k:<21} {v}\n" for k, v in diagnose.ERROR_TYPES.items()))
@@ -151,7 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_get)
     s = sub.add_parser("set", parents=[common], help="write a channel (JSON for arrays and structs)",
                        description="Write a channel. A channel with a failsafe value goes back to it when "
-                                   "this command's connection ends (a warning says so).")
+                                   "this command's connection ends (a warning says so). A board that restarts "
+                                   "when its port opens (an Uno) forgets the value at the next command (a note "
+                                   "says so): `hubwire serve` keeps it running.")
     s.add_argument("url", help=url_help)
     s.add_argument("channel", help="name of a writable channel (`hubwire info` lists them)")
     s.add_argument("value", help=_VALUE_HELP)
@@ -189,6 +212,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     _Parser.json_errors = "--json" in argv
     try:
         args = build_parser().parse_args(argv)
+        # Ctrl-C ends a command within interrupt.ENDS_WITHIN at any load; watch and serve end normally
+        interrupt.install(0 if args.command in ("watch", "serve", "dashboard") else 130)
         try:
             status = int(args.fn(args))
         except KeyboardInterrupt:

@@ -14,8 +14,9 @@ from ..job import Job
 
 __all__ = ["run_mission"]
 
-#: seconds to wait for the board to confirm a cancel after Ctrl-C
-CANCEL_WAIT = 5.0
+#: seconds to wait for the board to confirm a cancel after Ctrl-C: within what a clean ending may take
+#: (hubwire.cli.interrupt), leaving time to say how it ended and to close the link
+CANCEL_WAIT = 0.8
 
 
 class _Progress:
@@ -89,7 +90,7 @@ def _cancel(job: Job, as_json: bool) -> int:
     except MissionError as e:
         outcome = str(e)
     except Timeout:
-        outcome = f"the board did not confirm the cancel within {CANCEL_WAIT:g} s"
+        outcome = f"cancel sent; the board did not confirm it within {CANCEL_WAIT:g} s"
     except KeyboardInterrupt:
         outcome = None
     message = f"{job.mission} run {job.run}: " + (outcome or "cancel sent")

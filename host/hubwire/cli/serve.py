@@ -5,11 +5,14 @@ import argparse
 import asyncio
 import inspect
 import logging
+import os
 import signal
 import ssl
 import sys
 from typing import Any, Awaitable, Callable, Dict, List, Optional, Sequence, Tuple
 
+from . import interrupt
+from ..diagnose import install_hint
 from ..errors import HubwireError
 from ..bridge.broker import BrokerSettings, argv_options, settings_from_args
 from ..bridge.broker import broker_address as parse_address
@@ -21,9 +24,10 @@ __all__ = ["add_commands", "serve", "cmd_serve", "cmd_list", "SHUTDOWN_S"]
 
 log = logging.getLogger("hubwire.service")
 
-#: after SIGTERM / SIGINT the service is gone within this long: the bridge says `offline`, the
-#: boards' links close; whatever has not finished by then is abandoned
-SHUTDOWN_S = 2.0
+#: after SIGTERM / SIGINT the service stops within this long: the bridge says `offline`, the
+#: boards' links close; whatever has not finished by then is abandoned (and the process is gone
+#: within hubwire.cli.interrupt.ENDS_WITHIN whatever happens)
+SHUTDOWN_S = 1.2
 
 
 def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
@@ -123,7 +127,7 @@ def mqtt_bridge() -> Callable[..., Any]:
         from ..bridge.mqtt import run_bridge
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --mqtt needs the MQTT client libraries, which this installation "
-                         f"lacks ({e}); install them with: pip install 'hubwire[mqtt]'") from None
+                         f"lacks ({e}); install them with: {install_hint('mqtt')}") from None
     return run_bridge
 
 
@@ -133,7 +137,7 @@ def dashboard(args: argparse.Namespace) -> Callable[[Fleet], Awaitable[Any]]:
         from ..dashboard import address_line, load_token, run_dashboard
     except ImportError as e:
         raise SystemExit(f"hubwire serve: --http needs the dashboard's libraries, which this installation "
-                         f"lacks ({e}); install them with: pip install 'hubwire[dashboard]'") from None
+                         f"lacks ({e}); install them with: {install_hint('dashboard')}") from None
     try:
         token, made = load_token(args.token, args.token_file)
     except (OSError, ValueError) as e:
@@ -151,7 +155,7 @@ def dashboard(args: argparse.Namespace) -> Callable[[Fleet], Awaitable[Any]]:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="hubwire serve: %(message)s" if not args.verbose else "%(asctime)s %(message)s")
+                        format="%(message)s" if not args.verbose else "%(asctime)s %(message)s")  # messages name hubwire serve
     logging.getLogger("hubwire.service").setLevel(logging.INFO)
     sock = args.socket or default_serve_socket()
     try:
@@ -178,8 +182,13 @@ def cmd_serve(args: argparse.Namespace) -> int:
     async def main() -> None:
         task = asyncio.current_task()
         loop = asyncio.get_running_loop()
+        def stop() -> None:
+            if not interrupt.arm(0):
+                os._exit(0)  # a second signal: at once
+            task.cancel()  # type: ignore[union-attr]
+
         for sig in (signal.SIGTERM, signal.SIGINT):
-            loop.add_signal_handler(sig, task.cancel)  # type: ignore[union-attr]
+            loop.add_signal_handler(sig, stop)
         await serve(fleet, sock, bridge, ready=lambda: print(f"READY {sock}", flush=True),
                     clients=clients, broker=broker)
 
@@ -193,7 +202,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from .support import print_json
+    from .support import columns, print_json
     from ..client.connection import Connection
 
     async def boards() -> List[Any]:
@@ -209,7 +218,8 @@ def cmd_list(args: argparse.Namespace) -> int:
         return 0
     if not rows:
         print("hubwire serve runs, and has found no board yet")
-    for b in rows:
-        sys.stdout.write(f"{b['key']}  {b['name']}  id {b['board_id'] or '-'}  {b['state']}"
-                         f"{'  on ' + b['port'] if b['port'] else ''}\n")
+        return 0
+    table = [("BOARD", "NAME", "BOARD ID", "STATE", "PORT")]
+    table += [(b["key"], b["name"], b["board_id"] or "-", b["state"], b["port"] or "") for b in rows]
+    sys.stdout.write(columns(table))
     return 0

@@ -5,14 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any, Dict, TextIO
+from typing import Any, Dict, Sequence, TextIO
 
 from .. import diagnose
 from ..client.protocol import jsonable
 from ..device import Device, connect
-from ..errors import HubwireError, Timeout
+from ..errors import HubwireError, NoDeviceFound, Timeout
+from ..ports import PYTHON_ADVICE
 
-__all__ = ["CliError", "jsonable", "fmt_value", "print_json", "progress_printer", "open_device", "channel",
+__all__ = ["CliError", "columns", "jsonable", "fmt_value", "print_json", "progress_printer", "open_device", "channel",
            "channel_json", "goal_or_argument"]
 
 
@@ -28,6 +29,12 @@ def fmt_value(v: Any) -> str:
     if v is None:
         return "-"
     return str(v)
+
+
+def columns(rows: Sequence[Sequence[str]]) -> str:
+    """``rows`` (the first one the headers) as text in aligned columns, one line each."""
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return "".join("  ".join(v.ljust(w) for v, w in zip(r, widths)).rstrip() + "\n" for r in rows)
 
 
 def print_json(obj: Any, out: TextIO = sys.stdout) -> None:
@@ -69,10 +76,21 @@ def open_device(args: argparse.Namespace) -> Device:
         raise CliError("ConnectTimeout", str(e)) from e
     except diagnose.PortOpenError:
         raise
+    except NoDeviceFound as e:
+        if url is None and str(e).endswith(PYTHON_ADVICE):
+            raise CliError("NoDeviceFound", str(e)[:-len(PYTHON_ADVICE)] + _name_the_port(args)) from None
+        raise
     except HubwireError as e:
         if url is not None and isinstance(e.__cause__, OSError):
             raise diagnose.open_error(url, e.__cause__) from e.__cause__
         raise
+
+
+def _name_the_port(args: argparse.Namespace) -> str:
+    """The command as typed with a port instead of ``auto``."""
+    rest = [getattr(args, k, None) for k in ("channel", "value", "action", "arg")]
+    example = " ".join(["hubwire", args.command, "/dev/ttyACM0", *(str(r) for r in rest if r is not None)])
+    return f"Name the board's port instead of auto, e.g. `{example}` (`hubwire ports` lists the ports)."
 
 
 def goal_or_argument(ch: Any, text: Any) -> Any:

@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 import time
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from .. import diagnose
 from .support import CliError, fmt_value, jsonable, open_device, print_json
@@ -71,8 +72,12 @@ def _watch(dev: Device, evs: Any, args: argparse.Namespace, tty: bool, start: fl
     readable = [c for c in dev.descriptor.channels if c.readable]
     next_at = start
     down_since: Optional[float] = None
+    printed = [_printed(dev, -1)[0]]  # lines the board printed before the view began are not shown
+    drawn = [0]  # lines of the last drawing on the terminal (redrawn in place)
+    last: Dict[str, str] = {}  # the last values and link lines printed off a terminal
     while duration is None or time.monotonic() - start < duration:
         _print_events(evs, args, tty, events, start, next_at, duration)
+        _print_printed(dev, args, tty, events, start, printed)
         now = time.monotonic()
         if duration is not None and now - start >= duration:
             break
@@ -83,13 +88,9 @@ def _watch(dev: Device, evs: Any, args: argparse.Namespace, tty: bool, start: fl
         if args.json:
             print_json({"t": t, "values": {k: jsonable(v) for k, v in values.items()}, "link": health})
         elif tty:
-            _draw(dev, readable, values, events, health, t)
+            drawn[0] = _draw(dev, readable, values, events, health, t, drawn[0])
         else:
-            print(f"t={t:.3f} " + " ".join(f"{k}={fmt_value(v)}" for k, v in values.items()), flush=True)
-            print(f"t={t:.3f} link state={health['state']} heartbeat_age_ms={health['heartbeat_age_ms']} "
-                  f"measured_heartbeat_ms={health['measured_heartbeat_ms']} "
-                  f"hub_errors={_fmt_counters(health['hub_errors'])} "
-                  f"device_errors={_fmt_counters(health['device_errors'])}", flush=True)
+            _print_changes(t, values, health, last)
         down_since = None if health["state"] == "ready" else (down_since or time.monotonic())
         if down_since is not None and not args.wait and time.monotonic() - down_since >= args.timeout:
             raise CliError("LinkLost", f"the board on {args.url} vanished: the link is down and it did not come "
@@ -118,6 +119,29 @@ def _print_events(evs: Any, args: argparse.Namespace, tty: bool, events: List[st
             print(f"t={t:.3f} event {ev.name}={fmt_value(ev.value)}", flush=True)
 
 
+def _printed(dev: Device, seen: int) -> Tuple[int, List[str]]:
+    """Lines of text the board printed since ``seen`` of them (none through hubwire serve)."""
+    printed = getattr(dev.session, "printed", None)
+    if printed is None:
+        return seen, []
+    count, latest = printed()
+    return count, latest[len(latest) - min(count - seen, len(latest)):] if seen >= 0 and count > seen else []
+
+
+def _print_printed(dev: Device, args: argparse.Namespace, tty: bool, events: List[str], start: float,
+                   printed: List[int]) -> None:
+    printed[0], lines = _printed(dev, printed[0])
+    t = round(time.monotonic() - start, 3)
+    for line in lines:
+        if args.json:
+            print_json({"t": t, "printed": line})
+        elif tty:
+            events.append(f"{t:8.3f}  the board printed: {line}")
+            del events[:-8]
+        else:
+            print(f"t={t:.3f} the board printed: {line}", flush=True)
+
+
 def _read_values(dev: Device, readable: Sequence[Any]) -> Dict[str, Any]:
     values: Dict[str, Any] = {}
     for c in readable:
@@ -136,11 +160,28 @@ def _fmt_counters(c: Dict[str, int]) -> str:
     return ",".join(f"{k}:{v}" for k, v in c.items())
 
 
+def _print_changes(t: float, values: Dict[str, Any], health: Dict[str, Any], last: Dict[str, str]) -> None:
+    """Off a terminal: the values line when a value changed, the link line when its state, heartbeat
+    interval or a counter changed (so that a log shows movement, not the same lines over and over)."""
+    lines = {"values": " ".join(f"{k}={fmt_value(v)}" for k, v in values.items()),
+             "link": f"link state={health['state']} measured_heartbeat_ms={health['measured_heartbeat_ms']} "
+                     f"hub_errors={_fmt_counters(health['hub_errors'])} "
+                     f"device_errors={_fmt_counters(health['device_errors'])}"}
+    for key, line in lines.items():
+        if last.get(key) != line:
+            last[key] = line
+            if key == "link":
+                line = line.replace(" measured", f" heartbeat_age_ms={health['heartbeat_age_ms']} measured", 1)
+            print(f"t={t:.3f} {line}", flush=True)
+
+
 def _draw(dev: Device, readable: Sequence[Any], values: Dict[str, Any], events: List[str], health: Dict[str, Any],
-          t: float) -> None:
+          t: float, drawn: int) -> int:
+    """The view on a terminal, drawn over the previous one (``drawn`` lines) rather than below it, so
+    the scrollback keeps what came before; cut to the terminal's height. Returns the lines drawn."""
     d = dev.descriptor
-    lines = [f"{d.name}{' ' + d.firmware if d.firmware else ''} on {dev.session.url}   t={t:.1f}s   "
-             f"link {health['state']}, heartbeat {health['heartbeat_age_ms']} ms ago, "
+    lines = [f"{d.name}{' ' + d.firmware if d.firmware else ''} on {dev.session.url}",
+             f"t={t:.1f}s   link {health['state']}, heartbeat {health['heartbeat_age_ms']} ms ago, "
              f"every {health['measured_heartbeat_ms']} ms", ""]
     w = max((len(c.name) for c in readable), default=4)
     for c in readable:
@@ -149,9 +190,13 @@ def _draw(dev: Device, readable: Sequence[Any], values: Dict[str, Any], events: 
     lines += ["", f"  errors heard by hub: {_fmt_counters(health['hub_errors'])}   "
                   f"by device: {_fmt_counters(health['device_errors'])}", "", "  events:"]
     lines += [f"  {e}" for e in events] or ["  (none yet)"]
-    lines.append("\n  Ctrl-C to quit")
-    sys.stdout.write("\x1b[H\x1b[2J" + "\n".join(lines) + "\n")
+    lines += ["", "  Ctrl-C to quit"]
+    size = shutil.get_terminal_size()
+    lines = [ln[:size.columns] for ln in lines[:max(1, size.lines - 1)]]
+    up = f"\x1b[{drawn}F" if drawn else ""  # to the first line of the previous drawing
+    sys.stdout.write(up + "".join(f"{ln}\x1b[K\n" for ln in lines) + "\x1b[J")
     sys.stdout.flush()
+    return len(lines)
 
 
 # ----------------------------------------------------------------------------------------- main

@@ -1,4 +1,4 @@
-"""The browser dashboard: every board live, drawn from its descriptor (``pip install 'hubwire[dashboard]'``).
+"""The browser dashboard: every board live, drawn from its descriptor (``pip install './host[dashboard]'`` from the clone).
 
 ``hubwire dashboard PORTS... --http 8080`` opens the boards itself; ``hubwire serve --http 8080``
 serves the page for the service's boards by calling :func:`run_dashboard` with its fleet::

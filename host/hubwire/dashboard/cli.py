@@ -19,7 +19,7 @@ __all__ = ["add_parser", "cmd_dashboard", "board_ports", "parse_rates"]
 
 def add_parser(sub: Any, parents: List[argparse.ArgumentParser]) -> None:
     s = sub.add_parser(
-        "dashboard", parents=parents, help="every board live in the browser (pip install 'hubwire[dashboard]')",
+        "dashboard", parents=parents, help="every board live in the browser (pip install './host[dashboard]')",
         description="Serve a web page showing each board: live values and plots, inputs for writable "
                     "channels, action buttons, events, link health and the descriptor. Listens on "
                     "this machine only unless --host says otherwise; a token is always required.")
@@ -61,7 +61,9 @@ def cmd_dashboard(args: argparse.Namespace) -> int:
     try:
         import nicegui  # noqa: F401
     except ImportError:
-        sys.stderr.write("hubwire: the dashboard needs NiceGUI (Python 3.10+): pip install 'hubwire[dashboard]'\n")
+        from ..diagnose import install_hint
+
+        sys.stderr.write(f"hubwire: the dashboard needs NiceGUI (Python 3.10+): {install_hint('dashboard')}\n")
         return 1
     ports = list(args.ports) or board_ports()
     if not ports:

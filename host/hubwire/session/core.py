@@ -45,6 +45,12 @@ _DEVICE_TRANSACTIONS = frozenset((m.REQUEST, m.CONTROL))
 _ACKS = frozenset((m.ACK, m.NAK))
 
 
+
+def measured_ms(since_ms: Optional[int]) -> Optional[int]:
+    """A device's measured heartbeat interval, None until measured (its first heartbeat after a start
+    carries 0: there was no previous one)."""
+    return since_ms or None
+
 class SessionCore:
     """One hub-side session with one device, living on ``loop`` (construct it on that loop)."""
 
@@ -133,7 +139,7 @@ class SessionCore:
             hub_counters=link.decoder.counters(),
             device_counters={"crc": hb.crc, "overflow": hb.overflow, "dropped": hb.dropped} if hb else {},
             stats=self.stats.as_dict(),
-            measured_heartbeat_ms=hb.since_ms if hb else None,
+            measured_heartbeat_ms=measured_ms(hb.since_ms if hb else None),
             hub_heartbeat_ms=link.heartbeat_ms,
             hub_heartbeat_since_ms=link.sent_since_ms or None,
         )
@@ -195,13 +201,21 @@ class SessionCore:
         # the handshake is done; discovery may take longer than the deadline as long as it makes
         # progress (a big descriptor on a slow line), but not connect_timeout without any
         self.progress_at = time.monotonic()
+        lost: Optional[Tuple[float, LinkLost]] = None  # the first loss during discovery, the last error
         while self.state is not State.READY and self.fatal is None:
-            idle = time.monotonic() - self.progress_at
+            now = time.monotonic()
+            idle = now - self.progress_at
+            if isinstance(self.discovery_error, LinkLost):
+                lost = (lost[0] if lost else now, self.discovery_error)
+            # a link lost during discovery is linked again, until a blocked loop() shows or the deadline
+            if lost and (now - lost[0] >= self.connect_timeout or self.link.blocked()):
+                hint = "" if "loop()" in str(lost[1]) else self.link.blocked_hint()
+                raise LinkLost(f"{lost[1]}{hint}")
             if idle >= self.connect_timeout:
                 raise Timeout(f"device on {self.url} answered the handshake but its descriptor did not "
-                              f"arrive: no progress for {self.connect_timeout:g} s")
-            if self.discovery_error is not None:
-                raise self.discovery_error
+                              f"arrive: no progress for {self.connect_timeout:g} s{self.link.blocked_hint()}")
+            if self.discovery_error is not None and not isinstance(self.discovery_error, LinkLost):
+                raise self.discovery_error  # a lost link is linked again, and discovery starts again
             if self.state is State.CLOSED:
                 raise HubwireError("session closed while connecting")
             await self._changes(min(0.5, self.connect_timeout - idle))
@@ -343,7 +357,7 @@ class SessionCore:
         self.link.down()
         if self.state is not State.CLOSED:
             self.state = State.LOST if self.device_hello is not None else State.CONNECTING
-        exc = LinkLost(f"link to {self.url} lost ({why})")
+        exc = LinkLost(f"link to {self.url} lost ({why}){self.link.blocked_hint()}")
         self.tx.fail_all(exc)
         self.hub.link_down()
         self.missions.link_down()  # runs go on on the board; their updates wait for the link

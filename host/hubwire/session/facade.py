@@ -149,6 +149,16 @@ class Session:
         """Current :class:`LinkHealth`."""
         return self.core.health()
 
+    def started_on_open(self) -> bool:
+        """True when the board seems to have restarted as the port opened (as an Uno does: the
+        next program to open the port restarts it again)."""
+        return bool(self.core.link.started_on_open)
+
+    def printed(self) -> "tuple[int, list[str]]":
+        """Lines of text the board printed on the line (``Serial.println``): how many in all, and the
+        latest (newest last); the frames they ran into were dropped (``dropped`` in :meth:`health`)."""
+        return self.core.link.printed.recent(self.core.link.decoder)
+
     # ------------------------------------------------------------------------- transactions
 
     def _run(self, aw: Any) -> Any:

@@ -88,6 +88,7 @@ class HubSide:
         self.resumed_head: Optional[Tuple[Any, int, int]] = None
         #: answers the device's own R / C / J
         self.answers = HubAnswers(core, channels)
+        self._noted = ""  # the unbound hub channels last logged (each set once)
         channels.add_listener(self)
 
     # ----------------------------------------------------------------------- declarations
@@ -180,14 +181,23 @@ class HubSide:
                 return
             self._bind, self._bind_sends = (seq, payload), 0
             core.stats.binds_sent += 1
-            failed = [f"{exp.name}: {m.nak_name(s)}" for exp, s in zip(desc.hub, self.statuses) if s]
-            if failed:
-                log.warning("hubwire: %s uses hub channels the hub does not offer as it expects: %s",
-                            desc.name, clip(", ".join(failed), 200))
+            self._note_unbound(desc)
             self._send_bind()
         if self.bound_key == self._key() and not self._head_out:
             self._send_head(desc)
         self._arm()
+
+    def _note_unbound(self, desc: Descriptor) -> None:
+        """Say once which hub channels the device uses that this program does not offer as it
+        expects: a warning when it offers some (a mistake), at info level when it offers none (a
+        command that only reads or writes the board's own channels)."""
+        failed = [f"{exp.name}: {m.nak_name(s)}" for exp, s in zip(desc.hub, self.statuses) if s]
+        text = clip(", ".join(failed), 200)
+        if not failed or text == self._noted:
+            return
+        self._noted = text
+        (log.warning if len(self.channels) else log.info)(
+            "hubwire: %s uses hub channels the hub does not offer as it expects: %s", desc.name, text)
 
     async def _read_board_id(self) -> None:
         try:

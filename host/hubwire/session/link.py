@@ -28,6 +28,7 @@ from typing import Any, List, Optional
 from ..transport import Transport
 from ..wire import messages as m
 from ..wire.frame import Frame, FrameDecoder, encode_frame
+from .sketch_hints import LoopWatch, PrintedText
 from .fragments import Reassembler, accepted, encode_message
 from .pacer import Pacer
 from .records import Stats
@@ -42,6 +43,8 @@ REOPEN_FIRST = 0.1
 REOPEN_MAX = 2.0
 #: the link is lost after this many of the device's heartbeat intervals without a frame
 LOSS_HEARTBEATS = 4
+#: a device silent this long (seconds) after the port opened, then saying hello, has just started
+START_SILENCE = 0.5
 #: the hub's heartbeats go out at this fraction of its announced interval (see the module docstring)
 HEARTBEAT_LEAD = 15 / 16
 #: after this many silent device intervals the hub probes with a hello ...
@@ -97,6 +100,14 @@ class Link:
         #: device hellos heard (threads waiting for a re-link watch it)
         self.hello_count = 0
         self.last_rx = 0.0
+        self.printed = PrintedText(str(transport.url))
+        self.opened_at = 0.0
+        #: the device's first frame came long after the port opened and its first heartbeat counts from
+        #: its boot: it started then (an Uno restarts when its port opens, and its bootloader waits),
+        #: rather than answering at once as a running one does
+        self.started_on_open = False
+        self._silent_start = False
+        self.loop_watch = LoopWatch()
         self._peer_hb_ms = 250
         self._hb_counter = 0
         self._last_hb_tx = 0.0
@@ -121,6 +132,7 @@ class Link:
     def open(self) -> None:
         """Open the transport (OSError if it cannot be) and start saying hello."""
         self._open_transport()
+        self.opened_at = time.monotonic()
         self._hello_tick()
 
     def _open_transport(self) -> None:
@@ -153,9 +165,14 @@ class Link:
 
     def _on_data(self, data: bytes) -> None:
         frames = self.decoder.feed(data)
+        if self.decoder.text_lines != self.printed.seen:  # a sketch printing on the line
+            self.printed.check(self.decoder, self.linked, time.monotonic())
         if not frames:
             return
         now = time.monotonic()
+        self.loop_watch.heard(now, self.last_rx, self._peer_hb_ms)
+        if not self.last_rx:
+            self._silent_start = now - self.opened_at >= START_SILENCE
         self.last_rx = now
         handle = self.owner.handle
         for f in frames:
@@ -249,6 +266,13 @@ class Link:
         self._hb_timer = self._loss_timer = None
         self._hello_tick()
 
+    def blocked_hint(self) -> str:
+        """What shows a blocked loop() on the device (sketch_hints.LoopWatch), or empty."""
+        return self.loop_watch.hint(self.peer_hb, self._peer_hb_ms)
+
+    def blocked(self) -> bool:
+        return self.loop_watch.gap_ms(self.peer_hb, self._peer_hb_ms) is not None
+
     def _loss_after(self) -> float:
         return LOSS_HEARTBEATS * self._peer_hb_ms / 1000.0
 
@@ -300,6 +324,8 @@ class Link:
         prev, self.peer_hb = self.peer_hb, hb
         self.peer_hb_at = now
         self.peer_hb_count += 1
+        if self.peer_hb_count == 1:  # a device's counter starts at 1 at boot (PROTOCOL.md 3.2)
+            self.started_on_open = self._silent_start and hb.counter <= 2
         self._beats_since_up += 1
         fresh = prev is None or hb.counter != prev.counter  # not a duplicated frame
         if hb.since_ms == 0 and fresh and self._beats_since_up > 1 and self.linked:
@@ -310,6 +336,8 @@ class Link:
 
     def _on_hello(self, f: Frame, now: float) -> None:
         outcome = self._hello_outcome(f)
+        if outcome in (HelloOutcome.FIRST, HelloOutcome.REBOOT):
+            self.loop_watch.started()
         if outcome is not None:
             self.owner.on_hello(outcome)
 

@@ -20,7 +20,8 @@ class State(enum.Enum):
 @dataclass(frozen=True)
 class ReceivedEvent:
     """An event received from the device: channel ``name``, decoded ``value``, ``seq`` and arrival
-    ``time`` (``time.monotonic()``)."""
+    ``time``: when the hub received it, in seconds of ``time.monotonic()`` (a clock that only
+    counts up, for intervals; not the time of day: take ``time.time()`` on receipt for that)."""
 
     name: str
     value: Any
@@ -33,7 +34,7 @@ class ReceivedEvent:
 class StreamSample:
     """One streamed sample: ``value``, device-side ``since_ms`` since the previous sample, ``seq``
     (the subscription's sample counter), ``lost`` (samples missed before this one, from seq gaps),
-    arrival ``time`` (``time.monotonic()``) and ``gap``: the link outages (losses, device reboots)
+    arrival ``time`` in seconds of ``time.monotonic()`` (for intervals, not the time of day) and ``gap``: the link outages (losses, device reboots)
     between the previous sample and this one, which the hub rode through by subscribing again.
     ``gap`` is 0 normally; when it is not, ``lost`` is 0 (the device counts its samples afresh) and
     how long the outage lasted is the difference of ``time`` with the previous sample."""
@@ -98,7 +99,8 @@ class LinkHealth:
     ``hub_counters`` are this hub's receiver counters (how well the hub hears the device);
     ``device_counters`` are the ones the device reported in its last heartbeat (how well it hears us).
     ``device_heartbeat_ms`` is the interval the device announced, ``measured_heartbeat_ms`` the one it
-    measured: the ms since its previous heartbeat carried by its latest one (None before any).
+    measured: the ms since its previous heartbeat carried by its latest one (None until measured: before
+    any, and after the first one of a device start, which has no previous one).
     ``hub_heartbeat_ms`` and ``hub_heartbeat_since_ms`` are the same of this hub's own heartbeats.
     """
 

@@ -248,7 +248,7 @@ class Transactions:
             return
         if p.tries >= self.tries_for(p):
             raise Timeout(f"no answer from the device on {self.core.url}{' for ' + what if what else ''} "
-                          f"after {p.tries} tries")
+                          f"after {p.tries} tries{self.core.link.blocked_hint()}")
         self.retry(p)
 
     def tries_for(self, p: Pending) -> int:

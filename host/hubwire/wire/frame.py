@@ -1,8 +1,10 @@
 """Frames: ``type seq id payload crc16``, COBS encoded, terminated by one ``0x00`` (PROTOCOL.md §1)."""
 from __future__ import annotations
 
+import re
 from binascii import crc_hqx
-from typing import Dict, List, NamedTuple, Optional
+from collections import deque
+from typing import Deque, Dict, List, NamedTuple, Optional
 
 from cobs.cobs import DecodeError as _CobsError
 from cobs.cobs import decode as _cobs_decode
@@ -25,6 +27,13 @@ PROTOCOL_MAX_PAYLOAD = 255
 HEADER_CRC_SIZE = 5
 #: bytes of the first discarded input a FrameDecoder keeps, to tell what a port said instead of frames
 NOISE_SAMPLE_SIZE = 64
+#: lines of text (a sketch's Serial.println) kept from among the discarded bytes, newest last;
+#: older ones are forgotten (:attr:`FrameDecoder.text_lines` counts them all)
+TEXT_LINES = 8
+#: a kept line is cut to this many characters
+TEXT_CHARS = 80
+# printable ASCII ended by a newline: what print()/println() on the hub's line looks like
+_TEXT_LINE = re.compile(rb"([\x20-\x7e\t]{2,})\r?\n")
 
 
 class Frame(NamedTuple):
@@ -110,7 +119,7 @@ class FrameDecoder:
     """
 
     __slots__ = ("max_payload", "crc", "overflow", "dropped", "frames", "_pending", "_raw_limit",
-                 "_fast_limit", "_spill", "_skipping", "sample")
+                 "_fast_limit", "_spill", "_skipping", "sample", "text", "text_lines")
 
     def __init__(self, max_payload: int = PROTOCOL_MAX_PAYLOAD) -> None:
         if not 0 <= max_payload <= PROTOCOL_MAX_PAYLOAD:
@@ -134,11 +143,19 @@ class FrameDecoder:
         self._skipping = False
         #: the first bytes discarded (at most NOISE_SAMPLE_SIZE); kept across reset()
         self.sample = b""
+        #: the latest lines of text found among the discarded bytes (TEXT_LINES, each TEXT_CHARS at most)
+        self.text: Deque[str] = deque(maxlen=TEXT_LINES)
+        #: every line of text found so far
+        self.text_lines = 0
 
     def _keep(self, data: bytes) -> None:
         # called for discarded bytes only, never on a valid frame's path
         if len(self.sample) < NOISE_SAMPLE_SIZE:
             self.sample = (self.sample + data)[:NOISE_SAMPLE_SIZE]
+        if b"\n" in data:
+            for line in _TEXT_LINE.findall(data):
+                self.text.append(line[:TEXT_CHARS].decode("ascii").strip())
+                self.text_lines += 1
 
     def noise(self) -> bytes:
         """:attr:`sample`, then the start of the bytes still waiting for a delimiter (bounded).

@@ -221,12 +221,11 @@ def test_streams_at_the_rate_asked_under_the_ceiling(broker: Broker, emulators, 
 
 CHILD = """
 import asyncio, sys
-sys.path.insert(0, sys.argv[3])
 from mqtt_bridge.helpers import StandInFleet
 from hubwire.bridge.mqtt import run_bridge
 
 async def main():
-    fleet = StandInFleet(sys.argv[4])
+    fleet = StandInFleet(sys.argv[3])
     await fleet.plug("rover", sys.argv[2])
     print("READY", flush=True)
     await run_bridge(fleet, "127.0.0.1", int(sys.argv[1]), service_id="child", keepalive=5)
@@ -246,8 +245,10 @@ def test_the_last_will_marks_the_service_offline_when_it_dies(broker: Broker, em
 
     async def main() -> None:
         async with watcher(broker.port, status, "hubwire/rover/status") as w:
-            child = subprocess.Popen([sys.executable, "-c", CHILD, str(broker.port), emu.link, tests_dir, cache_dir],
-                                     stdout=subprocess.PIPE)
+            # the tests' helpers importable in the child as they are here (the package is installed)
+            path = os.pathsep.join(p for p in (tests_dir, os.environ.get("PYTHONPATH")) if p)
+            child = subprocess.Popen([sys.executable, "-c", CHILD, str(broker.port), emu.link, cache_dir],
+                                     stdout=subprocess.PIPE, env=dict(os.environ, PYTHONPATH=path))
             try:
                 await w.wait_for(lambda: w.last.get(status) == b"online", 15, "the service online")
                 await w.wait_for(lambda: w.last.get("hubwire/rover/status") == b"online", 10, "the board online")

@@ -229,7 +229,7 @@ def test_mqtt_without_its_client_library_says_how_to_install_it(tmp_path: Any) -
             f"sys.exit(main(['serve', '--no-usb', '--mqtt', 'localhost:1883', '--socket', {str(tmp_path / 's.sock')!r}]))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert r.returncode == 1, r
-    assert "pip install 'hubwire[mqtt]'" in r.stderr and "aiomqtt" in r.stderr
+    assert "pip install './host[mqtt]'" in r.stderr and "aiomqtt" in r.stderr  # from the clone: not on PyPI
     assert not os.path.exists(tmp_path / "s.sock")
 
 

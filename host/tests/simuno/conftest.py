@@ -214,6 +214,9 @@ class Examples:
         sim = Simuno(self.binary, elf, str(self.tmp_path / name), str(self.tmp_path / f"{name}.log"))
         sim.start()
         self.sims[name] = sim
+        # simavr keeps to wall-clock time only when it gets the CPU: on a busy machine the board's
+        # bootloader wait and start-up take several times longer than the 5 s default deadline
+        connect.setdefault("timeout", 30.0)
         dev = hubwire.connect(transport=tapped(sim.link), **connect)
         self.devices.append(dev)
         return dev
