@@ -253,7 +253,7 @@ class HubBridge(Provider):
                 try:
                     await self._session()
                 except aiomqtt.MqttError as e:
-                    log.info("hubwire serve: MQTT (hub channels): broker %s:%d: %s", self.host, self.port, e)
+                    log.debug("hubwire serve: MQTT (hub channels): broker %s:%d: %s", self.host, self.port, e)
                 self.client = None
                 self.connected.clear()
                 await asyncio.sleep(RECONNECT_S)

@@ -46,9 +46,11 @@ def test_the_page_lists_the_hub_channels_a_board_uses(tmp_path: Any) -> None:
             page.goto(url.group(1))
             expect = playwright_api.expect
             expect(page.locator('[data-hw-state="thermostat"]')).to_have_text("ready", timeout=WAIT_S * 1000)
-            for name in ("setpoint", "report", "alarm", "mode"):
+            for name in ("setpoint", "report", "alarm"):  # nobody provides them
                 row = page.locator(f'[data-hw-hub="thermostat.{name}"]')
                 expect(row).to_have_text("not bound here: UNKNOWN_CHANNEL", timeout=WAIT_S * 1000)
+            # a hub event is offered by the fleet itself (any client may send one), as by hubwire serve
+            expect(page.locator('[data-hw-hub="thermostat.mode"]')).to_have_text("bound here", timeout=WAIT_S * 1000)
             assert page.locator('[data-hw-hub^="thermostat."]').count() == 4
             browser.close()
     finally:
