@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
+.PHONY: all setup test test-cpp test-avr-core test-compile-cost test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -35,7 +35,7 @@ uno-firmware:
 	  $(BUILD)/uno/MinimalBoardId >/dev/null
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
+	$(MAKE) test-cpp test-avr-core test-compile-cost test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -50,6 +50,12 @@ test-avr-core:
 	    -Itest/support -DHUBWIRE_PORT_HEADER='"port_bare.h"' -c $$f -o $(BUILD)/avr-core/$$(basename $$f).o || exit 1; \
 	done
 	@echo "test-avr-core: $(words $(CORE_SOURCES)) files compile for atmega328p with -Wall -Wextra -Werror"
+
+# What a sketch's descriptor costs the compiler stays small: 32 channels with 60-character
+# descriptions (the default HUBWIRE_MAX_CHANNELS) build for the Uno within 256 MiB of address space
+# (bench/descriptor-compile.sh; `make bench` measures the whole curve).
+test-compile-cost:
+	BUILD=$(BUILD) bash bench/descriptor-compile.sh --check
 
 # Every example for the AVR boards, then the benchmark sketches under extras/ for the Uno.
 test-examples:
