@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-compile-errors test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
+.PHONY: all setup test test-cpp test-avr-core test-compile-errors test-compile-cost test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -46,7 +46,7 @@ $(BUILD)/uno/MinimalBoardId/Minimal.ino.elf: $(wildcard examples/Minimal/*) $(LI
 	  $(BUILD)/uno/MinimalBoardId >/dev/null
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-compile-errors test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
+	$(MAKE) test-cpp test-avr-core test-compile-errors test-compile-cost test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -66,6 +66,12 @@ test-avr-core:
 # names the channel and the mistake in at most 20 lines (test/compile_fail/first_sketch.sh).
 test-compile-errors:
 	bash test/compile_fail/first_sketch.sh $(BUILD)/compile-errors
+
+# What a sketch's descriptor costs the compiler stays small: 32 channels with 60-character
+# descriptions (the default HUBWIRE_MAX_CHANNELS) build for the Uno within 256 MiB of address space
+# (bench/descriptor-compile.sh; `make bench` measures the whole curve).
+test-compile-cost:
+	BUILD=$(BUILD) bash bench/descriptor-compile.sh --check
 
 # Every example for the AVR boards, then the benchmark sketches under extras/ for the Uno.
 test-examples:

@@ -1,62 +1,174 @@
 #!/usr/bin/env bash
-# What building the descriptor (its JSON, FNV-1a hash and SHA-256 digest, all worked out by the
-# compiler: src/hubwire/channels/tables.h) costs the compiler: wall time and peak memory of the
-# largest declaration (test_limits' 254 channels, 12.6 KB of JSON) and of examples/Rover, each with
-# avr-g++ (as the Arduino IDE compiles a sketch for the Uno: -std=gnu++11 -Os) and g++ (as CMake
-# builds the tests and the emulator: -std=c++11 -O2 -g). One translation unit each, compiled alone.
+# What building the descriptor (its JSON, FNV-1a hash and SHA-256 digest, the channel records: all
+# worked out by the compiler, src/hubwire/channels/descriptor_text.h and tables.h) costs the
+# compiler: CPU time and peak memory of one sketch's translation unit, compiled alone, for N float
+# channels `expose(...).writable().range(-1.0f, 1.0f).unit("m/s").describe(D characters)`
+# (bench/descriptor_sketch.py). avr-g++ compiles it as the Arduino IDE does for the Uno (the AVR
+# platform's flags, -flto included); g++ as the emulator is built (-std=c++11 -O2 -g). The peer
+# row is the same content as a hand-written descriptor string in flash (a framing-only library).
+# Writes bench/DESCRIPTOR-COMPILE.md, with the targets of issue 32 marked met or missed.
 #
 #   bash bench/descriptor-compile.sh [TREE]   TREE: a source tree to measure (default: this one), e.g.
 #                                             an older commit's `git archive` to compare against
+#   bash bench/descriptor-compile.sh --check  (make test-compile-cost) only the 32-channel sketch with
+#                                             60-character descriptions, for the Uno, under a 256 MiB
+#                                             `ulimit -v`: fails when building it needs more
+#
+# Each compile runs under `ulimit -v` of LIMIT_MIB (default 4096): a tree that needs more is
+# reported as over the limit instead of pressing a shared machine into swap.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 here=$(pwd)
+check=0
+if [ "${1:-}" = --check ]; then check=1; shift; fi
 tree=$(realpath "${1:-.}")
-out=$here/build/descriptor-compile
+out=$(realpath -m "${BUILD:-build}/descriptor-compile")
 mkdir -p "$out"
 core=/usr/share/arduino/hardware/arduino/avr
 
-# test_limits' 254 channels as an AVR unit (the gtest suite itself does not build for AVR).
-cat >"$out/limits254.cpp" <<'CPP'
-#include "hubwire/channels/declare.h"
-uint16_t level;
-#define LEVEL(name) expose(#name, level).streamable()
-#define LEVELS_1(p) LEVEL(p##0), LEVEL(p##1)
-#define LEVELS_2(p) LEVELS_1(p##0), LEVELS_1(p##1)
-#define LEVELS_3(p) LEVELS_2(p##0), LEVELS_2(p##1)
-#define LEVELS_4(p) LEVELS_3(p##0), LEVELS_3(p##1)
-#define LEVELS_5(p) LEVELS_4(p##0), LEVELS_4(p##1)
-#define LEVELS_6(p) LEVELS_5(p##0), LEVELS_5(p##1)
-#define LEVELS_7(p) LEVELS_6(p##0), LEVELS_6(p##1)
-HUBWIRE_CHANNELS(most, "limits", LEVELS_7(level0), LEVELS_6(level10), LEVELS_5(level110), LEVELS_4(level1110),
-                 LEVELS_3(level11110), LEVELS_2(level111110), LEVELS_1(level1111110));
-const hubwire::ChannelTable* used = &most;
-CPP
+# The AVR platform's compile recipe for a .cpp (platform.txt: compiler.cpp.flags and the Uno's
+# defines), with the one define Debian's avr-gcc 5.4 needs (docs: TOOLCHAIN).
+avr=(avr-g++ -c -g -Os -w -std=gnu++11 -fpermissive -fno-exceptions -ffunction-sections -fdata-sections
+     -fno-threadsafe-statics -Wno-error=narrowing -flto -mmcu=atmega328p -DF_CPU=16000000L -DARDUINO=10807
+     -DARDUINO_AVR_UNO -DARDUINO_ARCH_AVR -DDECIMAL_DIG=__DECIMAL_DIG__ -I"$core/cores/arduino"
+     -I"$core/variants/standard")
+host=(g++ -c -std=c++11 -O2 -g -DNDEBUG -DHUBWIRE_PORT_HEADER='"hubwire/port_arduino.h"'
+      -I"$tree/tools/emulator/arduino")
 
-# measure LABEL CMD... -> "wall s (CPU s), peak MiB", or "failed". The CPU time (user + system) is
-# what to compare on a busy machine: the wall time grows with whatever else runs.
+# measure LABEL CMD... -> "CPU s|peak MiB|status": CPU = user + system (what to compare on a busy
+# machine). status: ok, "refused" (the library's own compile error: a descriptor over 16 KiB) or failed.
+limit=${LIMIT_MIB:-4096}
 measure() {
-  local label=$1
+  local label=$1 status=ok
   shift
-  if /usr/bin/time -f "%e %U %S %M" -o "$out/time.txt" "$@" >"$out/$label.log" 2>&1; then
-    awk '{printf "%s s (CPU %.2f s), %d MiB", $1, $2 + $3, $4 / 1024}' "$out/time.txt"
+  (ulimit -v $((limit * 1024)) && exec /usr/bin/time -f "%U %S %M" -o "$out/$label.time" "$@") >"$out/$label.log" 2>&1 ||
+    status=failed
+  if [ $status = failed ] && grep -q "descriptor longer than the 16 KiB" "$out/$label.log"; then status=refused; fi
+  if [ $status = failed ] && grep -q "memory exhausted\|out of memory\|Cannot allocate" "$out/$label.log"; then status=limit; fi
+  tail -n 1 "$out/$label.time" | awk -v s=$status '{printf "%.2f|%d|%s", $1 + $2, $3 / 1024, s}' # after any "exited" line
+}
+sketch() {  # N D|bare [--peer] -> path of the generated unit
+  local f=$out/sketch-$1-$2${3:-}.cpp flags=()
+  if [ "$2" = bare ]; then flags=(--bare); fi
+  python3 bench/descriptor_sketch.py "$1" "${2/bare/0}" "${flags[@]}" "${@:3}" >"$f"
+  echo "$f"
+}
+cell() {  # "CPU|MiB|status" -> table cell
+  IFS='|' read -r c m s <<<"$1"
+  case $s in
+    ok) echo "$m MiB / $c s" ;;
+    refused) echo "$m MiB / $c s (refused: over 16 KiB)" ;;
+    limit) echo "over $limit MiB (stopped after $c s)" ;;
+    *) echo "failed" ;;
+  esac
+}
+verdict() {  # "CPU|MiB|status" max-MiB max-CPU(or -) -> met / **missed**
+  IFS='|' read -r c m s <<<"$1"
+  if [ "$s" = failed ] || [ "$s" = limit ]; then echo "**missed**"; return; fi
+  if [ "$m" -le "$2" ] && { [ "$3" = - ] || awk -v c="$c" -v t="$3" 'BEGIN{exit !(c <= t)}'; }; then
+    echo met
   else
-    echo "failed (see $out/$label.log)"
+    echo "**missed**"
   fi
 }
+json_bytes() {  # N D|bare -> the descriptor's length (the peer sketch's string is the same JSON)
+  local bare=False
+  if [ "$2" = bare ]; then bare=True; fi
+  python3 -c "import sys; sys.path.insert(0, 'bench'); import descriptor_sketch as s; print(len(s.descriptor($1, ${2/bare/0}, $bare)))"
+}
+# More channels than the default 32 need HUBWIRE_MAX_CHANNELS raised (config.h), as a sketch would.
+max() { if [ "$1" -gt 32 ]; then echo -DHUBWIRE_MAX_CHANNELS=254; else echo -DHUBWIRE_MAX_CHANNELS=32; fi; }
+avr_unit() { measure "avr-$1-$2" "${avr[@]}" "$(max "$1")" -I"$tree/src" -x c++ "$(sketch "$1" "$2")" -o "$out/avr.o"; }
+host_unit() { measure "host-$1-$2" "${host[@]}" "$(max "$1")" -I"$tree/src" -x c++ "$(sketch "$1" "$2")" -o "$out/host.o"; }
+peer_unit() { measure "peer-$1-$2" "${avr[@]}" -x c++ "$(sketch "$1" "$2" --peer)" -o "$out/peer.o"; }
 
-avr=(avr-g++ -std=gnu++11 -mmcu=atmega328p -Os -fno-exceptions -fno-threadsafe-statics -ffunction-sections
-     -fdata-sections -DF_CPU=16000000L -DARDUINO=10807 -DARDUINO_AVR_UNO -DARDUINO_ARCH_AVR)
-host=(g++ -std=c++11 -O2 -g -DNDEBUG)
-limits=(-DHUBWIRE_MAX_CHANNELS=254 -DHUBWIRE_MAX_STREAMS=0)
+if [ $check = 1 ]; then
+  limit=256
+  r=$(avr_unit 32 60)
+  IFS='|' read -r c m st <<<"$r"
+  if [ "$st" != ok ]; then
+    echo "descriptor-compile: 32 channels with 60-character descriptions do not build for the Uno in $limit MiB" \
+      "(see $out/avr-32-60.log)" >&2
+    exit 1
+  fi
+  echo "descriptor-compile: 32 channels with 60-character descriptions build for the Uno in $m MiB, $c s CPU" \
+    "(limit $limit MiB of address space)"
+  exit 0
+fi
 
-echo "| unit | avr-g++ $(avr-g++ -dumpversion) | g++ $(g++ -dumpversion) |"
-echo "| --- | --- | --- |"
-a=$(measure limits-avr "${avr[@]}" "${limits[@]}" -I"$tree/src" -c "$out/limits254.cpp" -o "$out/limits-avr.o")
-g=$(measure limits-host "${host[@]}" "${limits[@]}" -DHUBWIRE_VECTORS_DIR=\"\" -I"$here/test/support" -I"$tree/src" \
-    -c "$tree/test/test_limits/test_limits.cpp" -o "$out/limits-host.o")
-echo "| 254 channels (avr: their declaration; g++: test/test_limits) | $a | $g |"
-a=$(measure rover-avr "${avr[@]}" -x c++ -include Arduino.h -I"$core/cores/arduino" -I"$core/variants/standard" \
-    -I"$tree/src" -c "$tree/examples/Rover/Rover.ino" -o "$out/rover-avr.o")
-g=$(measure rover-host "${host[@]}" -DHUBWIRE_NONCE_SOURCE=emulatorNonce -I"$tree/tools/emulator/arduino" -I"$tree/src" \
-    -c "$tree/tools/emulator/emulator.cpp" -o "$out/rover-host.o")
-echo "| examples/Rover (avr: the sketch; g++: the emulator, which includes it) | $a | $g |"
+declare -A A H P
+rows=("5 8" "5 60" "20 8" "20 60" "32 8" "32 60" "80 8" "80 60" "254 bare" "254 60")
+for r in "${rows[@]}"; do
+  read -r n d <<<"$r"
+  A[$n-$d]=$(avr_unit "$n" "$d")
+  H[$n-$d]=$(host_unit "$n" "$d")
+  P[$n-$d]=$(peer_unit "$n" "$d")
+  echo "descriptor-compile: $n channels, $d-character descriptions: avr ${A[$n-$d]}, g++ ${H[$n-$d]}, peer ${P[$n-$d]}" >&2
+done
+sweep=(0 60 120 180 250)
+declare -A S
+for d in "${sweep[@]}"; do
+  if [ -n "${A[20-$d]:-}" ]; then S[$d]=${A[20-$d]}; else S[$d]=$(avr_unit 20 "$d"); fi
+done
+
+{
+  echo "# What the descriptor costs the compiler"
+  echo
+  echo "Measured by \`bash bench/descriptor-compile.sh\` (\`make bench\` runs it) on $(date -u +%Y-%m-%d): one sketch's"
+  echo "translation unit compiled alone under \`/usr/bin/time\`, peak memory (maximum resident set) and CPU"
+  echo "time (user + system; the machine is shared, so wall time says little). The sketch: N float channels"
+  echo "\`expose(\"v000\", v[0]).writable().range(-1.0f, 1.0f).unit(\"m/s\").describe(...)\` with descriptions of the"
+  echo "given length (bench/descriptor_sketch.py). avr-g++ $(avr-g++ -dumpversion) with the Arduino AVR platform's flags for the"
+  echo "Uno (-Os -flto -std=gnu++11 -fpermissive ...); g++ $(g++ -dumpversion) as the emulator is built (-O2 -g). Peer: the"
+  echo "same JSON as a hand-written string in PROGMEM, sent on request (a framing-only library), same"
+  echo "avr-g++ flags. A descriptor over the 16 KiB a hub accepts is refused with a compile error (254"
+  echo "channels with 60-character descriptions: about 32 KB): its row is the cost until that error."
+  echo
+  echo "## Targets (issue 32)"
+  echo
+  echo "| target | measured | verdict |"
+  echo "| --- | --- | --- |"
+  echo "| 32 channels, 60-character descriptions, avr-g++: at most 150 MiB and 1.5 s CPU | $(cell "${A[32-60]}") | $(verdict "${A[32-60]}" 150 1.5) |"
+  echo "| 254 channels, 60-character descriptions, avr-g++: at most 600 MiB | $(cell "${A[254-60]}") | $(verdict "${A[254-60]}" 600 -) |"
+  echo
+  echo "## Channels x description length"
+  echo
+  echo "Description \"bare\": \`expose(\"v000\", v[0])\` alone, no options (254 such channels fit 16 KiB)."
+  echo
+  echo "| channels | description | JSON bytes | avr-g++ | g++ | peer (avr-g++) |"
+  echo "| --- | --- | --- | --- | --- | --- |"
+  for r in "${rows[@]}"; do
+    read -r n d <<<"$r"
+    echo "| $n | $d | $(json_bytes "$n" "$d") | $(cell "${A[$n-$d]}") | $(cell "${H[$n-$d]}") | $(cell "${P[$n-$d]}") |"
+  done
+  echo
+  echo "## 20 channels, description length alone (avr-g++)"
+  echo
+  echo "| description | JSON bytes | avr-g++ |"
+  echo "| --- | --- | --- |"
+  for d in "${sweep[@]}"; do echo "| $d | $(json_bytes 20 "$d") | $(cell "${S[$d]}") |"; done
+  cat <<'MD'
+
+## Before (a5c2de9, the tree before issue 32's work, avr-g++, the same script)
+
+| channels | description | JSON bytes | avr-g++ |
+| --- | --- | --- | --- |
+| 5 | 8 | 431 | 87 MiB / 0.22 s |
+| 5 | 60 | 691 | 166 MiB / 0.41 s |
+| 20 | 8 | 1657 | 334 MiB / 0.87 s |
+| 20 | 60 | 2697 | 770 MiB / 1.85 s |
+| 32 | 8 | 2641 | 604 MiB / 1.39 s |
+| 32 | 60 | 4305 | 1445 MiB / 3.12 s |
+| 80 | 8 | 6577 | 2322 MiB / 4.55 s |
+| 80 | 60 | 10737 | over 4096 MiB (stopped after 7.43 s) |
+| 254 | bare | 10078 | over 4096 MiB (stopped after 7.46 s) |
+| 254 | 60 | 34208 | over 4096 MiB (stopped after 10.78 s) |
+
+20 channels, description length alone: none 261 MiB, 60 characters 770, 120: 1295, 180: 1946,
+250: 3400 (superlinear: each character was found by a walk from the start of its text). g++ 12
+costs about what it cost before: its constexpr evaluator remembers only calls nested less than 8
+deep, so it takes the walks (channels/constexpr_text.h, HUBWIRE_CX_REMEMBERS).
+MD
+} >"$out/DESCRIPTOR-COMPILE.md"
+if [ "$tree" = "$here" ]; then cp "$out/DESCRIPTOR-COMPILE.md" bench/DESCRIPTOR-COMPILE.md; fi
+cat "$out/DESCRIPTOR-COMPILE.md"

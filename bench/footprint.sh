@@ -5,7 +5,7 @@
 #   bash bench/footprint.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out=build/footprint
+out=${BUILD:-build}/footprint  # BUILD: another build folder, as make BUILD=... gives
 size_of() {  # sketch dir -> "flash sram heap"
   local dir=$1 name
   name=$(basename "$dir")

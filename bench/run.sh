@@ -33,6 +33,7 @@ mkdir -p build/bench
 rm -rf build/bench/results
 
 step footprint bash bench/footprint.sh
+step descriptor_compile bash bench/descriptor-compile.sh
 step rx_cycles "$PY" bench/rx_cycles.py
 step wire_bytes "$PY" bench/wire_bytes.py
 step wire_large "$PY" bench/wire_large.py

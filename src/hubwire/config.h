@@ -45,7 +45,11 @@
 #define HUBWIRE_MAX_RETURN HUBWIRE_LARGEST_SCALAR
 #endif
 
-// Highest channel id, 1..254 (channels are numbered 1..N in declaration order).
+// Highest channel id, 1..254 (channels are numbered 1..N in declaration order). The compiler builds
+// the descriptor, its hash and digest and the channel tables: a sketch of 32 float channels with a
+// range, a unit and 60-character descriptions (4.3 KB of JSON) takes avr-gcc 5.4 about 190 MiB and
+// 0.7 s of CPU for the Uno (make test-compile-cost checks it fits 256 MiB), growing with the JSON's
+// length: 80 such channels about 450 MiB, 254 plain ones 800 MiB (bench/DESCRIPTOR-COMPILE.md).
 #ifndef HUBWIRE_MAX_CHANNELS
 #define HUBWIRE_MAX_CHANNELS 32
 #endif

@@ -6,6 +6,17 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Which of two ways to work text out: GCC before 10 remembers the value of every constexpr call
+// (avr-gcc 5.4, the Debian Arduino compiler, also copies a constant whole at every read of any part
+// of it), so there a character is found by a few remembered calls. clang remembers no call, and GCC
+// from 10 on only calls nested less than -fconstexpr-cache-depth (8) deep: there the walks from the
+// start of a text, and reads of the arrays already made, cost less.
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ < 10
+#define HUBWIRE_CX_REMEMBERS 1
+#else
+#define HUBWIRE_CX_REMEMBERS 0
+#endif
+
 namespace hubwire {
 namespace cx {
 
@@ -43,10 +54,29 @@ constexpr char escapedAt(char c, size_t i) {
          : escapedLength(c) == 2 ? (i == 0 ? '\\' : c)
                                  : (i == 0 ? '\\' : i == 1 ? 'u' : i < 4 ? '0' : i == 4 ? hexDigits()[(uint8_t)c >> 4] : hexDigits()[c & 15]);
 }
+// A text's escaped characters. Where calls are remembered, where the escaped text of s[j] starts is
+// worked out once for each j, and character i found by a binary search over j (walking the text
+// from its start for each character made a text cost the square of its length); elsewhere the walk
+// takes fewer steps.
+#if !HUBWIRE_CX_REMEMBERS
 constexpr size_t escapedLength(const char* s) { return *s ? escapedLength(*s) + escapedLength(s + 1) : 0; }
 constexpr char escapedAt(const char* s, size_t i) {
   return i < escapedLength(*s) ? escapedAt(*s, i) : escapedAt(s + 1, i - escapedLength(*s));
 }
+#else
+constexpr size_t escapedBefore(const char* s, size_t j) { return j == 0 ? 0 : escapedBefore(s, j - 1) + escapedLength(s[j - 1]); }
+constexpr size_t escapedLength(const char* s) { return escapedBefore(s, length(s)); }
+// The j of output character i: escapedBefore(s, lo) <= i < escapedBefore(s, hi).
+constexpr size_t escapedSource(const char* s, size_t i, size_t lo, size_t hi) {
+  return hi - lo == 1 ? lo
+       : i < escapedBefore(s, (lo + hi) / 2) ? escapedSource(s, i, lo, (lo + hi) / 2)
+                                             : escapedSource(s, i, (lo + hi) / 2, hi);
+}
+constexpr char escapedAt(const char* s, size_t i, size_t j) { return escapedAt(s[j], i - escapedBefore(s, j)); }
+constexpr char escapedAt(const char* s, size_t i) {  // most texts need no escape: s[i] itself
+  return escapedLength(s) == length(s) ? s[i] : escapedAt(s, i, escapedSource(s, i, 0, length(s)));
+}
+#endif
 
 // ---- integers ----
 constexpr size_t digits(uint64_t v) { return v < 10 ? 1 : 1 + digits(v / 10); }

@@ -226,9 +226,13 @@ class Decl {
          : k == 14 ? (retCount_ ? integer(",\"rvc\":", retCount_) : empty())
                    : literal("}");  // k == 15
   }
-  constexpr size_t jsonLength(uint8_t id, uint8_t k = 0) const {
-    return k == kPiecesPerChannel ? 0 : pieceLength(piece(k, id)) + jsonLength(id, (uint8_t)(k + 1));
+  // Where piece k starts in the entry (k = kPiecesPerChannel: the entry's length), each k worked
+  // out once (descriptor_text.h finds a character's piece by a binary search over them).
+  constexpr size_t pieceStart(uint8_t id, uint8_t k) const {
+    return k == 0 ? 0 : pieceStart(id, (uint8_t)(k - 1)) + pieceLength(piece((uint8_t)(k - 1), id));
   }
+  constexpr size_t jsonLength(uint8_t id) const { return pieceStart(id, kPiecesPerChannel); }
+  // Character i of the entry, by a walk over the pieces (what the tests read).
   constexpr char jsonAt(uint8_t id, size_t i, uint8_t k = 0) const {
     return i < pieceLength(piece(k, id)) ? pieceAt(piece(k, id), i)
                                          : jsonAt(id, i - pieceLength(piece(k, id)), (uint8_t)(k + 1));

@@ -43,8 +43,7 @@
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
   constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
-  static_assert(::hubwire::declare::Report<decltype(declared), &declared, false>::ok &&                  \
-                ::hubwire::declare::Report<decltype(declared), &declared, true>::ok, "");                     \
+  static_assert(::hubwire::declare::Reported<decltype(declared), &declared>::ok, "");                \
   /* the hub channels' values pass through the same value code (strings, structs) */               \
   constexpr uint16_t features =                                                                    \
       (uint16_t)(::hubwire::declare::featuresOf(declared.list) | ::hubwire::declare::featuresOf(declared.hub)); \

@@ -119,6 +119,13 @@ struct List<H, R...> {
   H head;
   List<R...> tail;
 };
+// A copy of a constant, to walk: GCC 5 copies a constant whole at every read of a part of it, so
+// a walk over the sketch's list (254 reads) reads this temporary, read in place, instead.
+template <typename L>
+constexpr L copyOf(const L& l) {
+  return l;
+}
+
 template <typename L, typename HL = List<> >
 struct Declared {
   static constexpr uint8_t size() { return L::size; }
@@ -163,21 +170,34 @@ struct Pick<Remote, H, R...> {
   static constexpr type make(const H& h, const R&... r) { return Add::make(h, Rest::make(r...)); }
 };
 
-// Is no channel in l called name? (report.h: two channels of one name are a mistake.)
-constexpr bool noneNamed(const List<>&, const char*) { return true; }
-template <typename H, typename... R>
-constexpr bool noneNamed(const List<H, R...>& l, const char* name) {
-  return !cx::equal(l.head.name(), name) && noneNamed(l.tail, name);
-}
+// The two lists: without hub channels (most sketches), the declarations fill the list in one
+// pack expansion (brace elision: List<H, R...> is {head, tail}), so that a list of 254 does not
+// copy its tails 254 times over while compiling; with them, Pick sorts them out.
+template <bool Mixed, typename... D>
+struct Split {
+  typedef Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type> Type;
+  static constexpr Type make(DeviceName dev, const D&... d) { return Type{dev, Pick<false, D...>::make(d...), Pick<true, D...>::make(d...)}; }
+};
+#if defined(__clang__)  // the braces are left out on purpose (brace elision), see above
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wmissing-braces"
+#endif
+template <typename... D>
+struct Split<false, D...> {
+  typedef Declared<List<D...> > Type;
+  static constexpr Type make(DeviceName dev, const D&... d) { return Type{dev, List<D...>{d..., List<>{}}, List<>{}}; }
+};
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
 
 template <typename... D>
-constexpr Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type> declared(DeviceName dev, D... d) {
+constexpr typename Split<(Pick<true, D...>::count > 0), D...>::Type declared(DeviceName dev, D... d) {
   static_assert(Pick<false, D...>::count <= HUBWIRE_MAX_CHANNELS,
                 "more channels than HUBWIRE_MAX_CHANNELS: raise it (at most 254)");
   static_assert(Pick<true, D...>::count <= HUBWIRE_MAX_HUB_CHANNELS,
                 "more hub channels than HUBWIRE_MAX_HUB_CHANNELS: raise it");
-  return Declared<typename Pick<false, D...>::type, typename Pick<true, D...>::type>{
-      dev, Pick<false, D...>::make(d...), Pick<true, D...>::make(d...)};
+  return Split<(Pick<true, D...>::count > 0), D...>::make(dev, d...);
 }
 
 }  // namespace declare

@@ -60,49 +60,6 @@ inline const HubTable* hubTable() { return HubwireHub<true, void>::table; }
 
 namespace declare {
 
-// ---- the "hub" list of the descriptor: `],"hub":[`, one entry per hub channel (the same JSON as
-// a channel's, numbered by hub id), then `]}` ----
-struct HubHeadPart {
-  static constexpr size_t length() { return 9; }
-  static constexpr char at(size_t i) { return "],\"hub\":["[i]; }
-};
-
-// The hub channels seen as a list of channels of their own, so that the channel machinery above
-// writes their JSON and their records.
-template <typename D, const D* Decls>
-struct HubSide {
-  typedef Declared<decltype(Decls->hub)> Type;
-  static constexpr Type value = {Decls->dev, Decls->hub, List<>{}};
-};
-template <typename D, const D* Decls>
-constexpr typename HubSide<D, Decls>::Type HubSide<D, Decls>::value;
-
-template <typename D, const D* Decls>
-struct HubText {
-  typedef typename HubSide<D, Decls>::Type HD;
-  Chars<HubHeadPart> head;
-  Channels<HD, &HubSide<D, Decls>::value, typename cx::MakeSeq<HD::size()>::type> body;
-};
-template <typename D, const D* Decls>
-struct Tail<D, Decls, true> {
-  typedef HubText<D, Decls> Text;
-  typedef typename HubSide<D, Decls>::Type HD;
-  static constexpr Text make() {
-    return Text{PartConst<HubHeadPart>::value,
-                Channels<HD, &HubSide<D, Decls>::value, typename cx::MakeSeq<HD::size()>::type>::make()};
-  }
-};
-template <typename D, const D* Decls>
-struct TailMessage<D, Decls, true>
-    : sha256::Concat<PartMessage<HubHeadPart>,
-                     sha256::Concat<Parts<typename HubSide<D, Decls>::Type, &HubSide<D, Decls>::value, 1,
-                                          HubSide<D, Decls>::Type::size() + 1>,
-                                    PartMessage<TailPart> > > {};
-template <typename D, const D* Decls>
-constexpr uint32_t hashOf(const HubText<D, Decls>& t, uint32_t h) {
-  return hashOf(t.body, fnvChars(t.head.c, sizeof(t.head.c), h));
-}
-
 // ---- the flash table ----
 // Owner: the sketch's own records (HUBWIRE_CHANNELS stores them, tables.h Stored), which tell the
 // session that runs this table from another one in the same program.

@@ -31,6 +31,10 @@ constexpr const char* fieldRun(const char* s, size_t j) {  // what goes before t
 constexpr bool fieldKeepsChar(char c) { return c != ':' && c != '[' && c != ']' && c != ','; }
 constexpr size_t fieldLength(const char* s, size_t j) { return cx::length(fieldRun(s, j)) + (fieldKeepsChar(s[j]) ? 1 : 0); }
 constexpr const char* fieldsEnd(const char* s, size_t n) { return n && s[n - 1] == ']' ? "" : "\"}"; }
+// Where the JSON of layout character j starts, each j once, and the j of JSON character i by a
+// binary search (fieldsBefore(s, lo) <= i < fieldsBefore(s, hi)): linear in the layout's length
+// where calls are remembered (constexpr_text.h), else a walk over the layout.
+#if !HUBWIRE_CX_REMEMBERS
 constexpr size_t fieldsLength(const char* s, size_t j = 0) {
   return s[j] ? fieldLength(s, j) + fieldsLength(s, j + 1) : cx::length(fieldsEnd(s, j));
 }
@@ -39,6 +43,24 @@ constexpr char fieldsAt(const char* s, size_t i, size_t j = 0) {
        : i < fieldLength(s, j) ? (i < cx::length(fieldRun(s, j)) ? fieldRun(s, j)[i] : s[j])
                                : fieldsAt(s, i - fieldLength(s, j), j + 1);
 }
+#else
+constexpr size_t fieldsBefore(const char* s, size_t j) { return j == 0 ? 0 : fieldsBefore(s, j - 1) + fieldLength(s, j - 1); }
+constexpr size_t fieldsLength(const char* s) {
+  return fieldsBefore(s, cx::length(s)) + cx::length(fieldsEnd(s, cx::length(s)));
+}
+constexpr size_t fieldsSource(const char* s, size_t i, size_t lo, size_t hi) {
+  return hi - lo == 1 ? lo
+       : i < fieldsBefore(s, (lo + hi) / 2) ? fieldsSource(s, i, lo, (lo + hi) / 2) : fieldsSource(s, i, (lo + hi) / 2, hi);
+}
+constexpr char fieldCharAt(const char* s, size_t i, size_t j) {  // i-th character of layout character j's JSON
+  return i < cx::length(fieldRun(s, j)) ? fieldRun(s, j)[i] : s[j];
+}
+constexpr char fieldsAt(const char* s, size_t i) {
+  return i >= fieldsBefore(s, cx::length(s))
+             ? fieldsEnd(s, cx::length(s))[i - fieldsBefore(s, cx::length(s))]
+             : fieldCharAt(s, i - fieldsBefore(s, fieldsSource(s, i, 0, cx::length(s))), fieldsSource(s, i, 0, cx::length(s)));
+}
+#endif
 
 // A layout's size in memory, with the alignment the board gives each field (so that it can be
 // compared with sizeof the struct), or kBadLayout when the text is malformed.

@@ -128,11 +128,13 @@ template <>
 struct MissionHookOf<true> {
   static constexpr bool (*dispatch())(Session&, uint8_t) { return &missionDispatch; }
 };
-constexpr bool anyMission(const List<>&) { return false; }
+constexpr bool anyMissionIn(const List<>&) { return false; }
 template <typename H, typename... R>
-constexpr bool anyMission(const List<H, R...>& l) {
-  return l.head.isMission() || anyMission(l.tail);
+constexpr bool anyMissionIn(const List<H, R...>& l) {
+  return l.head.isMission() || anyMissionIn(l.tail);
 }
+template <typename... T>
+constexpr bool anyMission(const List<T...>& l) { return anyMissionIn(copyOf(l)); }  // dsl.h: copyOf
 
 }  // namespace declare
 }  // namespace hubwire

@@ -1,5 +1,5 @@
-// The flash tables a declaration list becomes, and their checks: the descriptor JSON as char
-// arrays laid end to end, its hash and digest, one ChannelInfo per channel and the copies it points to (a
+// The flash tables a declaration list becomes, and their checks: the descriptor JSON with its hash
+// and digest (descriptor_text.h), one ChannelInfo per channel and the copies it points to (a
 // struct's layout, the function called, range and failsafe values). table() checks what needs the
 // whole list (names unique, texts short, descriptor size) and returns the ChannelTable begin() takes.
 #ifndef HUBWIRE_CHANNELS_TABLES_H
@@ -9,9 +9,9 @@
 #include <stdint.h>
 
 #include "../wire/messages.h"
-#include "../wire/sha256.h"
 #include "channel.h"
 #include "constexpr_text.h"
+#include "descriptor_text.h"
 #include "dsl.h"
 
 namespace hubwire {
@@ -21,199 +21,61 @@ template <typename T, Kind K, typename C>
 constexpr bool textsShort(const Decl<T, K, C>& d) {
   return shortText(d.name()) && shortText(d.unitText()) && shortText(d.descriptionText()) && shortText(d.layout());
 }
-constexpr bool allTextsShort(const List<>&) { return true; }
+constexpr bool allTextsShortIn(const List<>&) { return true; }
 template <typename H, typename... R>
-constexpr bool allTextsShort(const List<H, R...>& l) {
-  return textsShort(l.head) && allTextsShort(l.tail);
+constexpr bool allTextsShortIn(const List<H, R...>& l) {
+  return textsShort(l.head) && allTextsShortIn(l.tail);
 }
+template <typename... T>
+constexpr bool allTextsShort(const List<T...>& l) { return allTextsShortIn(copyOf(l)); }
 
-// The i-th declaration of a list (0-based).
-template <size_t I>
-struct At {
-  template <typename L>
-  static constexpr auto of(const L& l) -> decltype(At<I - 1>::of(l.tail)) {
-    return At<I - 1>::of(l.tail);
-  }
-};
-template <>
-struct At<0> {
-  template <typename L>
-  static constexpr auto of(const L& l) -> decltype(l.head) {
-    return l.head;
-  }
-};
+// Is no channel in l called name? Are all names in l different?
+constexpr bool noneNamed(const List<>&, const char*) { return true; }
+template <typename H, typename... R>
+constexpr bool noneNamed(const List<H, R...>& l, const char* name) {
+  return !cx::equal(l.head.name(), name) && noneNamed(l.tail, name);
+}
+constexpr bool namesUniqueIn(const List<>&) { return true; }
+template <typename H, typename... R>
+constexpr bool namesUniqueIn(const List<H, R...>& l) {
+  return noneNamed(l.tail, l.head.name()) && namesUniqueIn(l.tail);
+}
+template <typename... T>
+constexpr bool namesUnique(const List<T...>& l) { return namesUniqueIn(copyOf(l)); }
 
-// The I-th declaration of a sketch's list, looked up once: At<I> walks the list, which every
-// character of the JSON (or every use) repeating it would make cost n^2 while compiling.
+// The same, for a sketch's list, without walking the list for every pair of names (32,000 walks
+// for 254 channels): each name's FNV-1a hash is worked out once, the hashes are compared in one
+// array passed by value (reading a constant array would copy it at every read), and only where
+// two are equal are the names compared as above.
+constexpr uint32_t nameHash(const char* s, uint32_t h = kFnvOffset) { return *s ? nameHash(s + 1, fnv1a(h, (uint8_t)*s)) : h; }
 template <typename D, const D* Decls, size_t I>
-struct DeclAt {
-  typedef decltype(At<I>::of(Decls->list)) Type;
-  static constexpr Type decl = At<I>::of(Decls->list);
-};
-template <typename D, const D* Decls, size_t I>
-constexpr typename DeclAt<D, Decls, I>::Type DeclAt<D, Decls, I>::decl;
-
-// ---- the descriptor in flash: one char array per part, laid end to end (no padding between
-// char arrays), so that no character is computed twice and no recursion runs the whole length ----
-// P has constexpr static length() and at(i).
-template <typename P, typename S = typename cx::MakeSeq<P::length()>::type>
-struct Chars;
-template <typename P, size_t... I>
-struct Chars<P, cx::Seq<I...> > {
-  char c[sizeof...(I)];
-  static constexpr Chars make() { return Chars{{P::at(I)...}}; }
-};
-
-template <typename D, const D* Decls>
-struct HeadPart {
-  static constexpr Piece piece(uint8_t k) {
-    return k == 0 ? integer("{\"p\":", kProtocolVersion)
-         : k == 1 ? quoted(",\"n\":\"", Decls->dev.name)
-         : k == 2 ? (Decls->dev.firmwareText ? quoted(",\"fw\":\"", Decls->dev.firmwareText) : empty())
-                  : literal(",\"ch\":[");
-  }
-  static constexpr size_t length(uint8_t k = 0) { return k == 4 ? 0 : pieceLength(piece(k)) + length((uint8_t)(k + 1)); }
-  static constexpr char at(size_t i, uint8_t k = 0) {
-    return i < pieceLength(piece(k)) ? pieceAt(piece(k), i) : at(i - pieceLength(piece(k)), (uint8_t)(k + 1));
-  }
+struct NameHash {
+  static constexpr uint32_t value = nameHash(DeclAt<D, Decls, I>::decl.name());
 };
 template <typename D, const D* Decls, size_t I>
-struct ChannelPart {
-  static constexpr size_t length() { return DeclAt<D, Decls, I>::decl.jsonLength((uint8_t)(I + 1)); }
-  static constexpr char at(size_t i) { return DeclAt<D, Decls, I>::decl.jsonAt((uint8_t)(I + 1), i); }
+constexpr uint32_t NameHash<D, Decls, I>::value;
+template <size_t N>
+struct Hashes {
+  uint32_t h[N];
 };
-struct TailPart {
-  static constexpr size_t length() { return 2; }
-  static constexpr char at(size_t i) { return "]}"[i]; }
-};
-
-// Each part's characters as a constant of its own, worked out once: the JSON in flash copies them
-// and the digest reads them. avr-gcc 5 copies a constant array whole at each read of an element, so
-// the digest reads parts (tens of bytes), never the whole JSON (up to 16 KiB, quadratic).
-template <typename P>
-struct PartConst {
-  static constexpr Chars<P> value = Chars<P>::make();
-};
-template <typename P>
-constexpr Chars<P> PartConst<P>::value;
-
-// What follows the channels: "]}", or the "hub" list and then "]}" (hub_table.h).
-template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
-struct Tail {
-  typedef Chars<TailPart> Text;
-  static constexpr Text make() { return PartConst<TailPart>::value; }
-};
-
-template <typename D, const D* Decls, typename S>
-struct Channels;
-template <typename D, const D* Decls>
-struct Channels<D, Decls, cx::Seq<> > {
-  typename Tail<D, Decls>::Text tail;
-  static constexpr Channels make() { return Channels{Tail<D, Decls>::make()}; }
-};
-template <typename D, const D* Decls, size_t I, size_t... R>
-struct Channels<D, Decls, cx::Seq<I, R...> > {
-  Chars<ChannelPart<D, Decls, I> > first;
-  Channels<D, Decls, cx::Seq<R...> > rest;
-  static constexpr Channels make() {
-    return Channels{PartConst<ChannelPart<D, Decls, I> >::value, Channels<D, Decls, cx::Seq<R...> >::make()};
-  }
-};
-template <typename D, const D* Decls>
-struct JsonText {
-  Chars<HeadPart<D, Decls> > head;
-  Channels<D, Decls, typename cx::MakeSeq<D::size()>::type> body;
-};
-
-// ---- the descriptor as one message for sha256.h: the parts (0 the head, K the channel K-1, then
-// the tail) joined as a balanced tree, so that reading a character goes log2(parts) levels deep ----
-template <typename P>
-struct PartMessage {
-  static constexpr size_t length() { return sizeof(Chars<P>); }
-  static constexpr char at(size_t i) { return PartConst<P>::value.c[i]; }
-};
-template <typename D, const D* Decls, size_t K>
-struct PartAt {
-  typedef ChannelPart<D, Decls, K - 1> Type;
-};
-template <typename D, const D* Decls>
-struct PartAt<D, Decls, 0> {
-  typedef HeadPart<D, Decls> Type;
-};
-template <typename D, const D* Decls, size_t Lo, size_t Hi, bool One = Hi - Lo == 1>
-struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls, (Lo + Hi) / 2, Hi> > {};
-template <typename D, const D* Decls, size_t Lo, size_t Hi>
-struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
-template <typename D, const D* Decls, bool Hub = (D::hubSize() > 0)>
-struct TailMessage : PartMessage<TailPart> {};
-template <typename D, const D* Decls>
-struct DescriptorMessage : sha256::Concat<Parts<D, Decls, 0, D::size() + 1>, TailMessage<D, Decls> > {};
-
-// The descriptor's hash (hello carries it), over the characters above: eight a level, one level a
-// channel, so that the compiler's depth limit is far away.
-constexpr uint32_t fnvChars(const char* c, size_t n, uint32_t h, size_t i = 0) {
-  return i + 8 <= n ? fnvChars(c, n,
-                               fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(h, (uint8_t)c[i]), (uint8_t)c[i + 1]),
-                                                                   (uint8_t)c[i + 2]), (uint8_t)c[i + 3]),
-                                                       (uint8_t)c[i + 4]), (uint8_t)c[i + 5]), (uint8_t)c[i + 6]),
-                                     (uint8_t)c[i + 7]),
-                               i + 8)
-         : i < n ? fnvChars(c, n, fnv1a(h, (uint8_t)c[i]), i + 1)
-                 : h;
+template <size_t N>
+constexpr bool hashLater(const Hashes<N>& a, size_t i, size_t j) {  // a.h[i] again at j or after? four a call
+  return j < N && (a.h[j] == a.h[i] || (j + 1 < N && a.h[j + 1] == a.h[i]) || (j + 2 < N && a.h[j + 2] == a.h[i]) ||
+                   (j + 3 < N && a.h[j + 3] == a.h[i]) || hashLater(a, i, j + 4));
 }
-constexpr uint32_t hashOf(const Chars<TailPart>& t, uint32_t h) { return fnvChars(t.c, sizeof(t.c), h); }
+template <size_t N>
+constexpr bool hashTwice(const Hashes<N>& a, size_t i = 0) { return i < N && (hashLater(a, i, i + 1) || hashTwice(a, i + 1)); }
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>
+struct NamesUnique;
 template <typename D, const D* Decls>
-constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<> >& b, uint32_t h) {
-  return hashOf(b.tail, h);
-}
-template <typename D, const D* Decls, size_t I, size_t... R>
-constexpr uint32_t hashOf(const Channels<D, Decls, cx::Seq<I, R...> >& b, uint32_t h) {
-  return hashOf(b.rest, fnvChars(b.first.c, sizeof(b.first.c), h));
-}
-
-// The JSON as a constant of its own: the hash and hello's fields are worked out from it.
-template <typename D, const D* Decls>
-struct TextOf {
-  static constexpr JsonText<D, Decls> value = {PartConst<HeadPart<D, Decls> >::value,
-                                               decltype(JsonText<D, Decls>::body)::make()};
+struct NamesUnique<D, Decls, cx::Seq<> > {
+  static constexpr bool value = true;
 };
-template <typename D, const D* Decls>
-constexpr JsonText<D, Decls> TextOf<D, Decls>::value;
-template <typename D, const D* Decls>
-constexpr uint32_t hashOfText() {
-  return hashOf(TextOf<D, Decls>::value.body,
-                fnvChars(TextOf<D, Decls>::value.head.c, sizeof(TextOf<D, Decls>::value.head.c), kFnvOffset));
-}
-
-// Hello's fixed fields (bytes 6..15: the payload the device accepts, its heartbeat interval, the
-// descriptor's hash and length, little-endian), then the first kDigestSize bytes of the JSON's
-// SHA-256 (hello 16..31), then the JSON: hello copies its fixed part from flash in one piece,
-// found at json - kDigestSize - kHelloFixed.
-struct HelloFixed {
-  uint8_t bytes[kHelloFixed];
+template <typename D, const D* Decls, size_t... I>
+struct NamesUnique<D, Decls, cx::Seq<I...> > {
+  static constexpr bool value =
+      !hashTwice(Hashes<sizeof...(I)>{{NameHash<D, Decls, I>::value...}}) || namesUnique(Decls->list);
 };
-constexpr HelloFixed helloFixed(uint16_t length, uint32_t hash) {
-  return HelloFixed{{(uint8_t)HUBWIRE_MAX_PAYLOAD, (uint8_t)(HUBWIRE_MAX_PAYLOAD >> 8), (uint8_t)HUBWIRE_HEARTBEAT_MS,
-                     (uint8_t)(HUBWIRE_HEARTBEAT_MS >> 8), (uint8_t)hash, (uint8_t)(hash >> 8), (uint8_t)(hash >> 16),
-                     (uint8_t)(hash >> 24), (uint8_t)length, (uint8_t)(length >> 8)}};
-}
-template <typename D, const D* Decls>
-struct JsonAndDigest {
-  HelloFixed hello;
-  sha256::Digest<kDigestSize> digest;
-  JsonText<D, Decls> text;
-};
-// value is constexpr where it is declared, so it is a member of a class of its own: a class cannot
-// hold a constexpr object of its own, still incomplete, type.
-template <typename D, const D* Decls>
-struct Json {
-  typedef JsonAndDigest<D, Decls> Stored;
-  static constexpr Stored value = {helloFixed((uint16_t)sizeof(JsonText<D, Decls>), hashOfText<D, Decls>()),
-                                   sha256::digest<DescriptorMessage<D, Decls>, kDigestSize>(),
-                                   TextOf<D, Decls>::value};
-};
-template <typename D, const D* Decls>
-constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value;
 
 // A struct channel's layout, compiled to two bytes a field (layout.h) into flash for the session's
 // struct codec.
@@ -271,14 +133,12 @@ template <typename D, const D* Decls, size_t I>
 struct Extra : LayoutStore<D, Decls, I>, CallStore<D, Decls, I>, LimitsStore<D, Decls, I> {
   constexpr Extra() {}
 };
+// Every channel's Extra as a direct base (not a chain of n classes, each converting to the next:
+// n^2 steps while compiling 254 channels).
 template <typename D, const D* Decls, typename S = typename cx::MakeSeq<D::size()>::type>
 struct Extras;
-template <typename D, const D* Decls>
-struct Extras<D, Decls, cx::Seq<> > {
-  constexpr Extras() {}
-};
-template <typename D, const D* Decls, size_t I, size_t... R>
-struct Extras<D, Decls, cx::Seq<I, R...> > : Extra<D, Decls, I>, Extras<D, Decls, cx::Seq<R...> > {
+template <typename D, const D* Decls, size_t... I>
+struct Extras<D, Decls, cx::Seq<I...> > : Extra<D, Decls, I>... {
   constexpr Extras() {}
 };
 
@@ -306,7 +166,7 @@ struct Infos<D, Decls, cx::Seq<I...> > {
 // attribute on a template's static member (it keeps it in .rodata, which Teensy 4 copies to RAM).
 template <typename D, const D* Decls>
 struct Stored {
-  typedef typename Json<D, Decls>::Stored JsonType;
+  typedef JsonAndDigest<D, Decls> JsonType;  // not Json<>: the hub side (hub_table.h) needs no JSON of its own
   typedef Extras<D, Decls> ExtrasType;
   typedef typename Infos<D, Decls>::Type InfosType;
   static constexpr JsonType json() { return Json<D, Decls>::value; }
@@ -314,20 +174,24 @@ struct Stored {
 };
 
 // The features of the whole list (features.h).
-constexpr uint16_t featuresOf(const List<>&) { return 0; }
+constexpr uint16_t featuresIn(const List<>&) { return 0; }
 template <typename H, typename... R>
-constexpr uint16_t featuresOf(const List<H, R...>& l) {
-  return (uint16_t)(l.head.features() | featuresOf(l.tail));
+constexpr uint16_t featuresIn(const List<H, R...>& l) {
+  return (uint16_t)(l.head.features() | featuresIn(l.tail));
 }
+template <typename... T>
+constexpr uint16_t featuresOf(const List<T...>& l) { return featuresIn(copyOf(l)); }
 
 // The reassembly buffer the list needs: its largest value written or passed in that does not fit
 // a frame (session/fragments.h), 0 for none.
-constexpr uint16_t largeInOf(const List<>&) { return 0; }
+constexpr uint16_t largeInIn(const List<>&) { return 0; }
 constexpr uint16_t larger(uint16_t a, uint16_t b) { return a > b ? a : b; }
 template <typename H, typename... R>
-constexpr uint16_t largeInOf(const List<H, R...>& l) {
-  return larger(l.head.largeIn(), largeInOf(l.tail));  // once each: a list of 254 stays linear
+constexpr uint16_t largeInIn(const List<H, R...>& l) {
+  return larger(l.head.largeIn(), largeInIn(l.tail));  // once each: a list of 254 stays linear
 }
+template <typename... T>
+constexpr uint16_t largeInOf(const List<T...>& l) { return largeInIn(copyOf(l)); }
 
 // json and infos: the sketch's copies of Stored<D, Decls>::json() and infos(), in flash.
 template <typename D, const D* Decls>

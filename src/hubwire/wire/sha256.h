@@ -13,7 +13,7 @@
 // is a constant of its own (State<Msg, k>::value), so no single constant evaluation covers more than
 // one block (64 rounds deep), and the chain of blocks is one template instantiation a block (257 for
 // 16 KiB, under the 900 of GCC and the 1024 of clang: GCC 5.4 stops at about 56 KB). What it costs
-// the compiler: bench/sha256-compile.sh (avr-g++ 5.4 keeps about 1 MB a block until the end).
+// the compiler: bench/sha256-compile.sh (avr-g++ 5.4 keeps about 0.8 MB a block until the end).
 #ifndef HUBWIRE_WIRE_SHA256_H
 #define HUBWIRE_WIRE_SHA256_H
 
@@ -29,11 +29,36 @@ struct Digest {
   uint8_t bytes[N];
 };
 
+namespace detail {
+
+// The big-endian word of bytes i..i+3 of a message: Msg::word(i) where the message has it (Concat:
+// one descent of the tree a word, not one a byte), else four at().
+template <typename Msg>
+constexpr uint32_t bytesWord(size_t i) {
+  return (uint32_t)(uint8_t)Msg::at(i) << 24 | (uint32_t)(uint8_t)Msg::at(i + 1) << 16 |
+         (uint32_t)(uint8_t)Msg::at(i + 2) << 8 | (uint8_t)Msg::at(i + 3);
+}
+template <typename Msg, typename = void>
+struct WordOf {
+  static constexpr uint32_t at(size_t i) { return bytesWord<Msg>(i); }
+};
+template <typename Msg>
+struct WordOf<Msg, decltype((void)Msg::word(0))> {
+  static constexpr uint32_t at(size_t i) { return Msg::word(i); }
+};
+
+}  // namespace detail
+
 // Two messages one after the other (e.g. the parts of the descriptor): a message itself.
 template <typename A, typename B>
 struct Concat {
   static constexpr size_t length() { return A::length() + B::length(); }
   static constexpr char at(size_t i) { return i < A::length() ? A::at(i) : B::at(i - A::length()); }
+  static constexpr uint32_t word(size_t i) {
+    return i + 4 <= A::length() ? detail::WordOf<A>::at(i)
+         : i >= A::length()     ? detail::WordOf<B>::at(i - A::length())
+                                : detail::bytesWord<Concat>(i);
+  }
 };
 
 namespace detail {
@@ -68,12 +93,12 @@ constexpr Words initial() {
                 0x5be0cd19UL}};
 }
 
-// Rotations spelt out, not calls of a rotate function: every constexpr call costs GCC 5 memory that
-// it keeps until the end of the file.
-constexpr uint32_t bigSigma0(uint32_t x) { return (x >> 2 | x << 30) ^ (x >> 13 | x << 19) ^ (x >> 22 | x << 10); }
-constexpr uint32_t bigSigma1(uint32_t x) { return (x >> 6 | x << 26) ^ (x >> 11 | x << 21) ^ (x >> 25 | x << 7); }
-constexpr uint32_t smallSigma0(uint32_t x) { return (x >> 7 | x << 25) ^ (x >> 18 | x << 14) ^ x >> 3; }
-constexpr uint32_t smallSigma1(uint32_t x) { return (x >> 17 | x << 15) ^ (x >> 19 | x << 13) ^ x >> 10; }
+// Rotations spelt out, and the sigma functions written into each round rather than called: every
+// constexpr call costs GCC 5 memory that it keeps until the end of the file (11 % of a block).
+#define HUBWIRE_SHA_S0(x) (((x) >> 2 | (x) << 30) ^ ((x) >> 13 | (x) << 19) ^ ((x) >> 22 | (x) << 10))
+#define HUBWIRE_SHA_S1(x) (((x) >> 6 | (x) << 26) ^ ((x) >> 11 | (x) << 21) ^ ((x) >> 25 | (x) << 7))
+#define HUBWIRE_SHA_s0(x) (((x) >> 7 | (x) << 25) ^ ((x) >> 18 | (x) << 14) ^ (x) >> 3)
+#define HUBWIRE_SHA_s1(x) (((x) >> 17 | (x) << 15) ^ ((x) >> 19 | (x) << 13) ^ (x) >> 10)
 
 // ---- padding: the message, 0x80, zeros, then its length in bits (64-bit big-endian) ----
 // size_t has 16 bits on AVR: the bit count is worked out in 64 bits.
@@ -91,8 +116,7 @@ constexpr uint8_t paddedByte(size_t i) {
 }
 template <typename Msg>
 constexpr uint32_t messageWord(size_t i) {
-  return (uint32_t)(uint8_t)Msg::at(i) << 24 | (uint32_t)(uint8_t)Msg::at(i + 1) << 16 |
-         (uint32_t)(uint8_t)Msg::at(i + 2) << 8 | (uint8_t)Msg::at(i + 3);
+  return WordOf<Msg>::at(i);
 }
 template <typename Msg>
 constexpr uint32_t paddedWord(size_t i) {
@@ -101,27 +125,39 @@ constexpr uint32_t paddedWord(size_t i) {
          (uint32_t)paddedByte<Msg>(i + 2) << 8 | (uint32_t)paddedByte<Msg>(i + 3);
 }
 
-// ---- one block: 64 rounds, one call each (64 deep). The working variables a..h and the schedule's
-// window W[t..t+15] are 24 word parameters, not an aggregate, and T1 is written out twice rather
-// than passed through a call of its own: GCC 5 keeps every constexpr call's arguments until the end
-// of the file, so fewer and smaller calls are what keeps its memory down (2 MB a block at first,
-// 1 MB now). W[t+16] is made while round t runs. ----
-constexpr Words rounds(unsigned t, uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f,
-                       uint32_t g, uint32_t h, uint32_t w0, uint32_t w1, uint32_t w2, uint32_t w3, uint32_t w4,
-                       uint32_t w5, uint32_t w6, uint32_t w7, uint32_t w8, uint32_t w9, uint32_t w10, uint32_t w11,
-                       uint32_t w12, uint32_t w13, uint32_t w14, uint32_t w15) {
-  return t == 64 ? Words{{a, b, c, d, e, f, g, h}}
-                 : rounds(t + 1,
-                          h + bigSigma1(e) + ((e & f) ^ (~e & g)) + roundConstant(t) + w0 +  // T1
-                              bigSigma0(a) + ((a & b) ^ (a & c) ^ (b & c)),                 // + T2
-                          a, b, c,
-                          d + h + bigSigma1(e) + ((e & f) ^ (~e & g)) + roundConstant(t) + w0,  // d + T1
-                          e, f, g, w1, w2, w3, w4, w5, w6, w7, w8, w9, w10, w11, w12, w13, w14, w15,
-                          smallSigma1(w14) + w9 + smallSigma0(w1) + w0);
-}
+// ---- one block: 64 rounds, one call each (64 deep), round t a function of its own with its
+// constant folded in (Round<t>::K). The working variables a..h and the schedule's window W[t..t+15]
+// are 24 word parameters, not an aggregate, and T1 is written out twice rather than passed through
+// a call of its own: GCC 5 keeps every constexpr call's arguments until the end of the file, so
+// fewer and smaller calls are what keeps its memory down. W[t+16] is made while round t runs. ----
+template <unsigned T>
+struct Round {
+  static constexpr uint32_t K = roundConstant(T);
+  static constexpr Words run(uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f, uint32_t g,
+                             uint32_t h, uint32_t w0, uint32_t w1, uint32_t w2, uint32_t w3, uint32_t w4, uint32_t w5,
+                             uint32_t w6, uint32_t w7, uint32_t w8, uint32_t w9, uint32_t w10, uint32_t w11,
+                             uint32_t w12, uint32_t w13, uint32_t w14, uint32_t w15) {
+    return Round<T + 1>::run(h + HUBWIRE_SHA_S1(e) + ((e & f) ^ (~e & g)) + K + w0 +  // T1
+                                 HUBWIRE_SHA_S0(a) + ((a & b) ^ (a & c) ^ (b & c)),   // + T2
+                             a, b, c,
+                             d + h + HUBWIRE_SHA_S1(e) + ((e & f) ^ (~e & g)) + K + w0,  // d + T1
+                             e, f, g, w1, w2, w3, w4, w5, w6, w7, w8, w9, w10, w11, w12, w13, w14, w15,
+                             HUBWIRE_SHA_s1(w14) + w9 + HUBWIRE_SHA_s0(w1) + w0);
+  }
+};
+template <unsigned T>
+constexpr uint32_t Round<T>::K;
+template <>
+struct Round<64> {
+  static constexpr Words run(uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f, uint32_t g,
+                             uint32_t h, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t,
+                             uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t) {
+    return Words{{a, b, c, d, e, f, g, h}};
+  }
+};
 template <typename Msg>
 constexpr Words blockRounds(const Words& h, size_t at) {
-  return rounds(0, h.h[0], h.h[1], h.h[2], h.h[3], h.h[4], h.h[5], h.h[6], h.h[7], paddedWord<Msg>(at),
+  return Round<0>::run(h.h[0], h.h[1], h.h[2], h.h[3], h.h[4], h.h[5], h.h[6], h.h[7], paddedWord<Msg>(at),
                 paddedWord<Msg>(at + 4), paddedWord<Msg>(at + 8), paddedWord<Msg>(at + 12), paddedWord<Msg>(at + 16),
                 paddedWord<Msg>(at + 20), paddedWord<Msg>(at + 24), paddedWord<Msg>(at + 28), paddedWord<Msg>(at + 32),
                 paddedWord<Msg>(at + 36), paddedWord<Msg>(at + 40), paddedWord<Msg>(at + 44), paddedWord<Msg>(at + 48),
@@ -179,5 +215,10 @@ constexpr Digest<N> digest() {
 
 }  // namespace sha256
 }  // namespace hubwire
+
+#undef HUBWIRE_SHA_S0
+#undef HUBWIRE_SHA_S1
+#undef HUBWIRE_SHA_s0
+#undef HUBWIRE_SHA_s1
 
 #endif

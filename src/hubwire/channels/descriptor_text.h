@@ -1,0 +1,304 @@
+// The descriptor JSON of a declaration list as the compiler builds it: one char array per part (the
+// head, each channel's entry, the hub list's head and entries, the tail) laid end to end in flash,
+// with its FNV-1a hash (hello carries it) and SHA-256 digest (hello's descriptor id).
+//
+// What it costs the compiler grows with the descriptor's length, no faster (bench/DESCRIPTOR-COMPILE.md):
+// every character is worked out once, by a few constexpr calls, and both hashes read those same
+// calls again (the compiler remembers each call's value), never the arrays: GCC 5 copies a constant
+// array whole at each read of one element, which made reading the JSON back quadratic.
+#ifndef HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
+#define HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../wire/messages.h"
+#include "../wire/sha256.h"
+#include "constexpr_text.h"
+#include "dsl.h"
+
+namespace hubwire {
+namespace declare {
+
+// The list from declaration I on, as a pointer into the sketch's constant: one step from the
+// previous one, so that reaching every declaration costs n steps, not n^2 (a walk from the
+// start for each, which for 254 channels was 32,000 function templates).
+template <typename D, const D* Decls, size_t I>
+struct ListAt {
+  typedef decltype(ListAt<D, Decls, I - 1>::ptr->tail) Type;
+  static constexpr const Type* ptr = &ListAt<D, Decls, I - 1>::ptr->tail;
+};
+template <typename D, const D* Decls>
+struct ListAt<D, Decls, 0> {
+  typedef decltype(Decls->list) Type;
+  static constexpr const Type* ptr = &Decls->list;
+};
+template <typename D, const D* Decls, size_t I>
+constexpr const typename ListAt<D, Decls, I>::Type* ListAt<D, Decls, I>::ptr;
+template <typename D, const D* Decls>
+constexpr const typename ListAt<D, Decls, 0>::Type* ListAt<D, Decls, 0>::ptr;
+
+// The I-th declaration (0-based) of a sketch's list, as a constant of its own.
+template <typename D, const D* Decls, size_t I>
+struct DeclAt {
+  typedef decltype(ListAt<D, Decls, I>::ptr->head) Type;
+  static constexpr Type decl = ListAt<D, Decls, I>::ptr->head;
+};
+template <typename D, const D* Decls, size_t I>
+constexpr typename DeclAt<D, Decls, I>::Type DeclAt<D, Decls, I>::decl;
+
+// A part's characters. P has constexpr static length() and at(i); each at(i) is one call the
+// compiler remembers, which the hashes below read again.
+template <typename P, typename S = typename cx::MakeSeq<P::length()>::type>
+struct Chars;
+template <typename P, size_t... I>
+struct Chars<P, cx::Seq<I...> > {
+  char c[sizeof...(I)];
+  static constexpr Chars make() { return Chars{{P::at(I)...}}; }
+};
+
+// ---- the parts ----
+template <typename D, const D* Decls>
+struct HeadPart {
+  static constexpr Piece piece(uint8_t k) {
+    return k == 0 ? integer("{\"p\":", kProtocolVersion)
+         : k == 1 ? quoted(",\"n\":\"", Decls->dev.name)
+         : k == 2 ? (Decls->dev.firmwareText ? quoted(",\"fw\":\"", Decls->dev.firmwareText) : empty())
+                  : literal(",\"ch\":[");
+  }
+  static constexpr size_t start(uint8_t k) { return k == 0 ? 0 : start((uint8_t)(k - 1)) + pieceLength(piece((uint8_t)(k - 1))); }
+  static constexpr size_t length() { return start(4); }
+  static constexpr char at(size_t i, uint8_t k = 3) {
+    return i >= start(k) ? pieceAt(piece(k), i - start(k)) : at(i, (uint8_t)(k - 1));
+  }
+};
+// Channel I's entry (id I + 1) of a list: the device's channels, or the hub's (HubSide).
+// A character is found with calls of scalars only: a call on a constant object, or with one as its
+// argument, costs GCC 5 a copy of it, so only the per-piece functions below (remembered, one call
+// a piece) touch the declaration and its pieces.
+template <typename D, const D* Decls, size_t I>
+struct ChannelPart {
+  static constexpr Piece piece(uint8_t k) { return DeclAt<D, Decls, I>::decl.piece(k, (uint8_t)(I + 1)); }
+  static constexpr size_t start(uint8_t k) { return DeclAt<D, Decls, I>::decl.pieceStart((uint8_t)(I + 1), k); }
+  static constexpr const char* pre(uint8_t k) { return piece(k).pre; }
+  static constexpr const char* post(uint8_t k) { return piece(k).post; }
+  static constexpr size_t preLength(uint8_t k) { return cx::length(pre(k)); }
+  static constexpr size_t valueEnd(uint8_t k) { return preLength(k) + valueLength(piece(k)); }
+  // The value's text itself where it is written as it is (a name, unit or description without
+  // escapes, a type name), else nullptr.
+  static constexpr const char* plain(uint8_t k) {
+    return piece(k).kind == kLiteral || (piece(k).kind == kEscaped && cx::escapedLength(piece(k).text) == cx::length(piece(k).text))
+               ? piece(k).text
+               : nullptr;
+  }
+  static constexpr size_t length() { return start(kPiecesPerChannel); }
+  static constexpr char charOf(uint8_t k, size_t j) {  // j-th character of piece k
+    return j < preLength(k)   ? pre(k)[j]
+         : j >= valueEnd(k)   ? post(k)[j - valueEnd(k)]
+         : plain(k)           ? plain(k)[j - preLength(k)]
+                              : declare::valueAt(piece(k), j - preLength(k));
+  }
+#if !HUBWIRE_CX_REMEMBERS
+  // No call remembered (constexpr_text.h): walking the pieces takes fewer steps than the search.
+  static constexpr char at(size_t i, uint8_t k = 0) {
+    return i < pieceLength(piece(k)) ? pieceAt(piece(k), i) : at(i - pieceLength(piece(k)), (uint8_t)(k + 1));
+  }
+#else
+  // The piece holding character i, the last one starting at or before it, in one call: sixteen
+  // remembered start(k) cost less than four calls of a binary search.
+  static_assert(kPiecesPerChannel == 16, "pieceOf() counts the starts of pieces 1..15");
+  static constexpr uint8_t pieceOf(size_t i) {
+    return (uint8_t)((i >= start(1)) + (i >= start(2)) + (i >= start(3)) + (i >= start(4)) + (i >= start(5)) +
+                     (i >= start(6)) + (i >= start(7)) + (i >= start(8)) + (i >= start(9)) + (i >= start(10)) +
+                     (i >= start(11)) + (i >= start(12)) + (i >= start(13)) + (i >= start(14)) + (i >= start(15)));
+  }
+  static constexpr char at(size_t i) { return charOf(pieceOf(i), i - start(pieceOf(i))); }
+#endif
+};
+struct HubHeadPart {  // between the channels and the hub channels
+  static constexpr size_t length() { return 9; }
+  static constexpr char at(size_t i) { return "],\"hub\":["[i]; }
+};
+struct TailPart {
+  static constexpr size_t length() { return 2; }
+  static constexpr char at(size_t i) { return "]}"[i]; }
+};
+
+// The hub channels (remote.h) seen as a list of channels of their own, so that the channel
+// machinery writes their JSON and their records (hub_table.h).
+template <typename D, const D* Decls>
+struct HubSide {
+  typedef Declared<decltype(Decls->hub)> Type;
+  static constexpr Type value = {Decls->dev, Decls->hub, List<>{}};
+};
+template <typename D, const D* Decls>
+constexpr typename HubSide<D, Decls>::Type HubSide<D, Decls>::value;
+
+// The descriptor's parts in order: 0 the head, 1..N the channels, then (with hub channels) the hub
+// list's head and its M entries, last the tail.
+template <typename D>
+constexpr size_t partCount() {
+  return D::size() + 2 + (D::hubSize() > 0 ? D::hubSize() + 1 : 0);
+}
+template <typename D>
+constexpr int partKind(size_t k) {
+  return k == 0 ? 0 : k <= D::size() ? 1 : k + 1 == partCount<D>() ? 4 : k == D::size() + 1 ? 2 : 3;
+}
+template <typename D, const D* Decls, size_t K, int Kind = partKind<D>(K)>
+struct PartAt {
+  typedef HeadPart<D, Decls> Type;
+};
+template <typename D, const D* Decls, size_t K>
+struct PartAt<D, Decls, K, 1> {
+  typedef ChannelPart<D, Decls, K - 1> Type;
+};
+template <typename D, const D* Decls, size_t K>
+struct PartAt<D, Decls, K, 2> {
+  typedef HubHeadPart Type;
+};
+template <typename D, const D* Decls, size_t K>
+struct PartAt<D, Decls, K, 3> {
+  typedef ChannelPart<typename HubSide<D, Decls>::Type, &HubSide<D, Decls>::value, K - D::size() - 2> Type;
+};
+template <typename D, const D* Decls, size_t K>
+struct PartAt<D, Decls, K, 4> {
+  typedef TailPart Type;
+};
+
+// Each part's characters as a constant of its own, worked out once: the JSON in flash copies it.
+template <typename P>
+struct PartConst {
+  static constexpr Chars<P> value = Chars<P>::make();
+};
+template <typename P>
+constexpr Chars<P> PartConst<P>::value;
+
+// A part's character i, for the hashes: where calls are remembered (constexpr_text.h), the call that
+// made the array, asked again (GCC 5 would copy the array whole at each read of one element);
+// elsewhere the array's element.
+#if !HUBWIRE_CX_REMEMBERS
+template <typename P>
+constexpr char partChar(size_t i) {
+  return PartConst<P>::value.c[i];
+}
+#else
+template <typename P>
+constexpr char partChar(size_t i) {
+  return P::at(i);
+}
+#endif
+
+// ---- the JSON: the parts' arrays nested first to last (char arrays: no padding between them) ----
+template <typename D, const D* Decls, typename S>
+struct TextParts;
+template <typename D, const D* Decls, size_t K>
+struct TextParts<D, Decls, cx::Seq<K> > {
+  Chars<typename PartAt<D, Decls, K>::Type> head;
+};
+template <typename D, const D* Decls, size_t K, size_t K2, size_t... R>
+struct TextParts<D, Decls, cx::Seq<K, K2, R...> > {
+  Chars<typename PartAt<D, Decls, K>::Type> head;
+  TextParts<D, Decls, cx::Seq<K2, R...> > rest;
+};
+template <typename D, const D* Decls>
+using JsonText = TextParts<D, Decls, typename cx::MakeSeq<partCount<D>()>::type>;
+// One flat list of the parts, which fills the nested arrays in order (brace elision): no part
+// is copied more than once.
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<partCount<D>()>::type>
+struct TextOf;
+#if defined(__clang__)  // the braces are left out on purpose (brace elision), see above
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wmissing-braces"
+#endif
+template <typename D, const D* Decls, size_t... K>
+struct TextOf<D, Decls, cx::Seq<K...> > {
+  static constexpr JsonText<D, Decls> make() { return JsonText<D, Decls>{PartConst<typename PartAt<D, Decls, K>::Type>::value...}; }
+};
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
+template <typename D, const D* Decls>
+struct TextConst {
+  static constexpr JsonText<D, Decls> value = TextOf<D, Decls>::make();
+};
+template <typename D, const D* Decls>
+constexpr JsonText<D, Decls> TextConst<D, Decls>::value;
+
+// ---- the hash hello carries: FNV-1a over the parts, eight characters a call; the state after
+// each part is a constant of its own, so no evaluation goes deeper than one part ----
+template <typename P>
+constexpr uint32_t fnvPart(uint32_t h, size_t i = 0) {
+  return i + 8 <= sizeof(Chars<P>)
+             ? fnvPart<P>(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(h, (uint8_t)partChar<P>(i)), (uint8_t)partChar<P>(i + 1)),
+                                                               (uint8_t)partChar<P>(i + 2)), (uint8_t)partChar<P>(i + 3)),
+                                                 (uint8_t)partChar<P>(i + 4)), (uint8_t)partChar<P>(i + 5)), (uint8_t)partChar<P>(i + 6)),
+                                 (uint8_t)partChar<P>(i + 7)),
+                          i + 8)
+         : i < sizeof(Chars<P>) ? fnvPart<P>(fnv1a(h, (uint8_t)partChar<P>(i)), i + 1)
+                           : h;
+}
+template <typename D, const D* Decls, size_t K>
+struct HashAfter {  // the hash of parts 0..K-1
+  static constexpr uint32_t value = fnvPart<typename PartAt<D, Decls, K - 1>::Type>(HashAfter<D, Decls, K - 1>::value);
+};
+template <typename D, const D* Decls>
+struct HashAfter<D, Decls, 0> {
+  static constexpr uint32_t value = kFnvOffset;
+};
+template <typename D, const D* Decls, size_t K>
+constexpr uint32_t HashAfter<D, Decls, K>::value;
+template <typename D, const D* Decls>
+constexpr uint32_t HashAfter<D, Decls, 0>::value;
+template <typename D, const D* Decls>
+constexpr uint32_t hashOfText() {
+  return HashAfter<D, Decls, partCount<D>()>::value;
+}
+
+// ---- the descriptor as one message for sha256.h: the parts joined as a balanced tree, so that
+// reading a character goes log2(parts) levels deep ----
+template <typename P>
+struct PartMessage {
+  static constexpr size_t length() { return sizeof(Chars<P>); }  // a constant: clang would work out P::length() anew
+  static constexpr char at(size_t i) { return partChar<P>(i); }
+};
+template <typename D, const D* Decls, size_t Lo, size_t Hi, bool One = Hi - Lo == 1>
+struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls, (Lo + Hi) / 2, Hi> > {};
+template <typename D, const D* Decls, size_t Lo, size_t Hi>
+struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
+template <typename D, const D* Decls>
+struct DescriptorMessage : Parts<D, Decls, 0, partCount<D>()> {};
+
+// Hello's fixed fields (bytes 6..15: the payload the device accepts, its heartbeat interval, the
+// descriptor's hash and length, little-endian), then the first kDigestSize bytes of the JSON's
+// SHA-256 (hello 16..31), then the JSON: hello copies its fixed part from flash in one piece,
+// found at json - kDigestSize - kHelloFixed.
+struct HelloFixed {
+  uint8_t bytes[kHelloFixed];
+};
+constexpr HelloFixed helloFixed(uint16_t length, uint32_t hash) {
+  return HelloFixed{{(uint8_t)HUBWIRE_MAX_PAYLOAD, (uint8_t)(HUBWIRE_MAX_PAYLOAD >> 8), (uint8_t)HUBWIRE_HEARTBEAT_MS,
+                     (uint8_t)(HUBWIRE_HEARTBEAT_MS >> 8), (uint8_t)hash, (uint8_t)(hash >> 8), (uint8_t)(hash >> 16),
+                     (uint8_t)(hash >> 24), (uint8_t)length, (uint8_t)(length >> 8)}};
+}
+template <typename D, const D* Decls>
+struct JsonAndDigest {
+  HelloFixed hello;
+  sha256::Digest<kDigestSize> digest;
+  JsonText<D, Decls> text;
+};
+// value is constexpr where it is declared, so it is a member of a class of its own: a class cannot
+// hold a constexpr object of its own, still incomplete, type.
+template <typename D, const D* Decls>
+struct Json {
+  typedef JsonAndDigest<D, Decls> Stored;
+  static constexpr Stored value = {helloFixed((uint16_t)sizeof(JsonText<D, Decls>), hashOfText<D, Decls>()),
+                                   sha256::digest<DescriptorMessage<D, Decls>, kDigestSize>(),
+                                   TextConst<D, Decls>::value};
+};
+template <typename D, const D* Decls>
+constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value;
+
+}  // namespace declare
+}  // namespace hubwire
+
+#endif
