@@ -114,12 +114,13 @@ fuzz-long: setup
 # The documentation site from docs/ (mkdocs.yml) into $(BUILD)/site, offline: the Python API from
 # the docstrings, the sketch API from the headers' /// comments (tools/docs/sketch_api.py). Strict:
 # a broken link, a missing page or an API name that does not resolve fails it. Then every link of
-# README.md to a file of the repository is checked (tools/docs/check_readme_links.py).
+# README.md to a file of the repository is checked (tools/docs/check_readme_links.py). Not -q:
+# mkdocs -q hides the warnings and then strict mode no longer counts them.
 MKDOCS := .venv/bin/mkdocs
 docs: setup
 	$(MAKE) test-docs
 test-docs:
-	NO_MKDOCS_2_WARNING=1 $(MKDOCS) build --strict --clean -q -d $(CURDIR)/$(BUILD)/site
+	NO_MKDOCS_2_WARNING=1 $(MKDOCS) build --strict --clean -d $(abspath $(BUILD)/site)
 	$(PY) tools/docs/check_readme_links.py
 	@echo "docs: built into $(BUILD)/site (open $(BUILD)/site/index.html)"
 
