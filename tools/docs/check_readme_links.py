@@ -3,6 +3,7 @@ exists: the README is read on GitHub, outside the documentation site's strict bu
 docs pages are checked against their headings as MkDocs spells them. Exit 1 naming each broken link."""
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -37,7 +38,7 @@ def broken(readme: Path) -> List[str]:
                 continue
             path, _, anchor = target.partition("#")
             file = (readme.parent / path).resolve()
-            where = f"{readme.relative_to(ROOT)}:{n}: {target}"
+            where = f"{os.path.relpath(readme, ROOT)}:{n}: {target}"
             if not file.exists():
                 bad.append(f"{where}: no such file")
             elif anchor and file.suffix == ".md" and anchor not in anchors(file):
