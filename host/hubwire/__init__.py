@@ -6,7 +6,7 @@ asyncio flavour. Both run on the same session core (:mod:`hubwire.session`).
 from __future__ import annotations
 
 from .errors import (DescriptorError, HubChannelError, HubwireError, InvalidValue, LinkLost, MissionCancelled,
-                     MissionError, MissionFailed, MissionLost, NakError, NoDeviceFound, NotRoutedYet,
+                     MissionError, MissionFailed, MissionLost, NakError, NoDeviceFound,
                      ProtocolVersionError, StreamEnded, Timeout, UnknownBoard)
 
 __version__ = "0.1.0"
@@ -14,7 +14,7 @@ __version__ = "0.1.0"
 __all__ = [
     "HubwireError", "Timeout", "NakError", "DescriptorError", "LinkLost", "ProtocolVersionError",
     "NoDeviceFound", "InvalidValue", "StreamEnded", "HubChannelError", "MissionError", "MissionFailed",
-    "MissionCancelled", "MissionLost", "NotRoutedYet", "UnknownBoard", "__version__",
+    "MissionCancelled", "MissionLost", "UnknownBoard", "__version__",
 ]
 
 from .descriptor import Channel, Descriptor, parse_descriptor  # noqa: E402

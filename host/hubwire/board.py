@@ -10,7 +10,7 @@ roads to it, as python-can's ``BusABC`` is for its buses.
 
 Every implementation names the protocol as a base class, so mypy checks its signatures against this
 one and refuses to instantiate one that lacks a member; ``isinstance(dev, BoardAPI)`` holds at run
-time too. What a road cannot do yet raises :class:`hubwire.NotRoutedYet`, never AttributeError.
+time too. Nothing is missing on either road (host/tests/roads/ runs one behaviour suite on both).
 ``host/tests/roads/`` runs one behaviour suite on both roads.
 """
 from __future__ import annotations

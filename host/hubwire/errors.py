@@ -131,15 +131,6 @@ class MissionLost(MissionError):
     """The run's outcome can never arrive: the board rebooted while it ran (or the session closed)."""
 
 
-class NotRoutedYet(HubwireError):
-    """What a board reached through ``hubwire serve`` cannot do yet: ``what`` (e.g. ``"missions"``)
-    and the message says what to do instead (usually: a program that opens the board's port itself)."""
-
-    def __init__(self, what: str, instead: str) -> None:
-        super().__init__(f"{what} are not routed through the service (hubwire serve) yet: {instead}")
-        self.what = what
-
-
 # ------------------------------------------------------------------- errors as types and back
 
 #: Every error type the command line, the service's socket and the MQTT bridge report
@@ -164,10 +155,11 @@ ERROR_TYPES: Dict[str, str] = {
     "UnknownBoard": "hubwire serve has no board of that name (the message lists the boards it has)",
     "ServiceNotRunning": "a board was named but hubwire serve is not running (the message says how to start it)",
     "Busy": "a per-client limit of hubwire serve was reached",
+    "UnknownRun": "hubwire serve keeps no mission run of that id",
+    "Conflict": "another client (or MQTT) already provides that hub channel (the message names both)",
     "MissionFailed": "the mission ended with a failure (its code is in the \"code\" field)",
     "MissionCancelled": "the mission was cancelled on the board",
     "MissionLost": "the board rebooted while the mission ran",
-    "NotRoutedYet": "what a board reached through hubwire serve cannot do yet (the message says what to do instead)",
     "Usage": "the command line (or a request to the service) is not valid (exit status 2)",
     "Error": "any other error",
 }
@@ -182,7 +174,7 @@ def error_type(exc: BaseException) -> str:
     if isinstance(exc, NakError):
         return "Nak"
     for cls in (InvalidValue, Timeout, LinkLost, NoDeviceFound, DescriptorError, ProtocolVersionError,
-                MissionFailed, MissionCancelled, MissionLost, NotRoutedYet):
+                MissionFailed, MissionCancelled, MissionLost):
         if isinstance(exc, cls):
             return cls.__name__
     if isinstance(exc, KeyError):

@@ -11,22 +11,13 @@ import time
 from typing import Any, AsyncIterator, Callable, Iterator, Optional
 
 from . import ops
-from .errors import NotRoutedYet, Timeout
+from .errors import Timeout
 from .session.missions import MissionRun, start_run_number
 from .wire import messages as m
 from .wire.frame import Frame
 from .wire.missions import cancel_payload
 
-__all__ = ["Job", "AsyncJob", "start_job", "start_async_job", "NOT_ROUTED", "missions_not_routed"]
-
-#: what starting a mission through ``hubwire serve`` says
-def missions_not_routed() -> NotRoutedYet:
-    """The error starting a mission through ``hubwire serve`` raises."""
-    return NotRoutedYet("missions", "start a mission from a program that opens the board's port itself (stop "
-                        "the service for that board first)")
-
-
-NOT_ROUTED = str(missions_not_routed())
+__all__ = ["Job", "AsyncJob", "start_job", "start_async_job"]
 
 
 def _cancelled(answer: Frame) -> bool:
@@ -121,8 +112,8 @@ class Job(_JobBase):
 def start_job(session: Any, name: str, goal: Any, timeout: Optional[float]) -> Job:
     """Start mission ``name`` on a synchronous session; the :class:`Job` once the run number is known."""
     ch, payload = ops.mission_start(session.descriptor, name, goal)  # a non-mission or a bad goal first
-    if getattr(session, "remote", None) is not None:
-        raise missions_not_routed()
+    if getattr(session, "remote", None) is not None:  # through hubwire serve: the service owns the run
+        return session.start_mission(name, goal, timeout)  # type: ignore[no-any-return]
     missions = session.core.missions
     missions.expect(ch.id)
     try:

@@ -14,7 +14,6 @@ import hubwire.aio
 from hubwire import MissionCancelled, MissionFailed, MissionLost, NakError
 from hubwire.descriptor import parse_descriptor
 from hubwire.errors import HubwireError, InvalidValue
-from hubwire.job import NOT_ROUTED
 from hubwire.testing.faultlink import Faults, FaultyTransport
 from hubwire.transport import SerialTransport
 from hubwire.wire.messages import NakCode
@@ -252,14 +251,17 @@ def test_the_asyncio_face() -> None:
         asyncio.run(main(dev))
 
 
-def test_missions_are_not_routed_through_the_service() -> None:
-    remote = types.SimpleNamespace(descriptor=parse_descriptor(DESCRIPTOR), remote=object())
+def test_a_routed_session_starts_missions_through_the_service() -> None:
+    started = []
+    remote = types.SimpleNamespace(descriptor=parse_descriptor(DESCRIPTOR), remote=object(),
+                                   start_mission=lambda *a: started.append(a) or "job")
     d = hubwire.Device(remote)  # type: ignore[arg-type]
-    with pytest.raises(HubwireError) as e:
-        d.start("drive", 2.0)
-    assert str(e.value) == NOT_ROUTED
+    assert d.start("drive", 2.0) == "job" and started == [("drive", 2.0, None)]
     with pytest.raises(HubwireError, match="not a mission"):  # the name is checked first
         d.start("beep", 1)
+    with pytest.raises(hubwire.InvalidValue):  # and the goal
+        d.start("drive", 20.0)
+    assert len(started) == 1
 
 
 def test_a_run_without_end_times_out_and_is_lost_when_the_session_closes() -> None:

@@ -19,6 +19,7 @@ import aiomqtt
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
+from . import mission_topics
 from .board import BoardBridge
 from .inbound import Inbound
 from .reply import Reply
@@ -174,6 +175,7 @@ class Bridge:
     async def run(self) -> None:
         loop = asyncio.get_running_loop()
         watcher = loop.create_task(self._watch_fleet())
+        unwatch_missions = mission_topics.watch(self)
         workers = [loop.create_task(self._worker()) for _ in range(WORKERS)]
         try:
             while True:
@@ -189,6 +191,7 @@ class Bridge:
                 await asyncio.sleep(self.config.reconnect_s)
         finally:
             watcher.cancel()
+            unwatch_missions()
             for w in workers:
                 w.cancel()
             for b in self.boards.values():
@@ -212,7 +215,7 @@ class Bridge:
             self.connections += 1
             self._failing = False
             await client.publish(status, ONLINE, qos=1, retain=True)
-            for f in self.topics.command_filters():
+            for f in self.topics.command_filters() + mission_topics.filters(self.topics):
                 await client.subscribe(f, qos=1)
             await client.subscribe(self.topics.descriptor_filter(), qos=1)
             if self.config.discovery_prefix:
@@ -323,7 +326,7 @@ class Bridge:
                 return  # large ones share the commands' rate (a flood of them would hold the loop)
             self._note_descriptor(topic, msg.payload)
             return
-        parsed = self.topics.parse_command(topic)
+        parsed = self.topics.parse_command(topic) or mission_topics.parse(self.topics, topic)
         if parsed is None:
             return
         key, op, channel = parsed
@@ -352,6 +355,9 @@ class Bridge:
             await reply.error(op, channel, "UnknownBoard",
                               f"no board {key!r}; boards: {', '.join(sorted(self.boards)) or 'none'}")
             return
+        if op.startswith("mission:"):
+            await mission_topics.command(self, bb, op, channel or "", bytes(payload), reply)
+            return
         await bb.command(op, channel, bytes(payload), reply)
 
     def note_refusal(self, why: str, key: str) -> None:
@@ -376,7 +382,7 @@ class Bridge:
             return "reply topic is too long"
         if not topic.startswith(self.reply_prefixes):
             return f"reply topic {shown} is outside {', '.join(self.reply_prefixes)} (the reply prefixes)"
-        if self.topics.parse_command(topic) is not None or topic.startswith(f"{self.topics.prefix}/_service/"):
+        if self.topics.parse_command(topic) or mission_topics.parse(self.topics, topic) or topic.startswith(f"{self.topics.prefix}/_service/"):
             return f"reply topic {shown} is a command or status topic of the bridge"
         return None
 

@@ -42,11 +42,14 @@ def cmd_ports(args: argparse.Namespace) -> int:
 def cmd_info(args: argparse.Namespace) -> int:
     with open_device(args) as dev:
         d = dev.descriptor
+        # through hubwire serve: who provides each hub channel (client/hub_client.py)
+        providers = dev.session.hub_status() if d.hub and hasattr(dev.session, "hub_status") else None
         if args.json:
             print_json({"url": dev.session.url, "name": d.name, "firmware": d.firmware, "protocol": d.protocol,
                          "descriptor_hash": f"{d.hash:08x}", "descriptor_length": len(d.raw),
                          "channels": [channel_json(c) for c in d.channels],
-                         "hub": [channel_json(c) for c in d.hub]})
+                         "hub": [channel_json(c) for c in d.hub],
+                         **({"hub_providers": providers} if providers is not None else {})})
         else:
             print(f"{d.name}{' ' + d.firmware if d.firmware else ''} on {dev.session.url} "
                   f"(descriptor {len(d.raw)} bytes, hash {d.hash:08x})")
@@ -54,6 +57,10 @@ def cmd_info(args: argparse.Namespace) -> int:
             if d.hub:
                 print(f"\nhub channels {d.name} uses (id: hub id; access: what the board does with it):")
                 print(channel_table(d, hub=True))
+            if providers is not None:
+                from ..client.hub_client import status_lines
+
+                print(f"\nprovided through hubwire serve:\n{status_lines(providers)}")
     return 0
 
 

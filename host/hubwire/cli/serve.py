@@ -49,6 +49,9 @@ def add_commands(sub: Any, out: argparse.ArgumentParser) -> None:
     s.add_argument("--mqtt-id", default=None, metavar="ID",
                    help="this service's id on the broker (default: the host name); each service on one "
                         "broker needs its own")
+    s.add_argument("--mqtt-hub", action="append", default=[], metavar="PATTERN",
+                   help="back the hub channels matching BOARD/CHANNEL (fnmatch: 'thermostat/*', '*') from MQTT "
+                        "when no client provides them (docs/MQTT.md \"Hub channels\")")
     for flags, kw in argv_options():
         s.add_argument(*flags, **kw)
     s.add_argument("--http", type=int, default=None, metavar="HTTP_PORT",
@@ -159,6 +162,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
         raise SystemExit(f"hubwire serve: MQTT settings: {e}") from None
     bridge = mqtt_bridge() if broker is not None else None
     clients = [dashboard(args)] if args.http is not None else []
+    if broker is not None:  # hub channels on the broker: their status, and those --mqtt-hub backs
+        from ..bridge.hub_topics import hub_bridge_task
+
+        clients.append(hub_bridge_task(broker, args.mqtt_hub))
     from ..daemon.store import Store, state_dir
 
     try:

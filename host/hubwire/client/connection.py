@@ -18,8 +18,10 @@ from ..board import AsyncBoardAPI
 from ..descriptor import Channel, Descriptor
 from ..descriptor.parse import parse_descriptor
 from ..errors import HubwireError, LinkLost
-from .routed_hub import AsyncRoutedHub
+from ..hub import HubChannels
+from ..hub_face import HubMethods
 from ..session import LinkHealth, ReceivedEvent, StreamSample
+from .hub_client import RemoteHub
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path
 from .streams import RemoteEvents, RemoteStream
 
@@ -159,15 +161,19 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
         dev = AsyncRemoteDevice(conn, reply["board"], parse_descriptor(reply["descriptor"]))
         await dev._watch()
         await dev._mark_events()
+        if dev.descriptor.hub:  # hub_binding() as the service binds the board now
+            await dev._hub_side().fetch_binding()
     except BaseException:
         await conn.close()
         raise
     return dev
 
 
-class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
+class AsyncRemoteDevice(HubMethods, AsyncBoardAPI):
     """A board through ``hubwire serve``: :class:`hubwire.board.AsyncBoardAPI`, as
-    :class:`hubwire.aio.AsyncDevice` is. Closing it ends this client's subscriptions; the board stays
+    :class:`hubwire.aio.AsyncDevice` is, hub channels as a direct device's (``hub``, ``provide``...
+    ``notify``; client/hub_client.py). Closing it ends this client's subscriptions and lets go of its
+    hub channels; the board stays
     connected to the service."""
 
     def __init__(self, conn: Connection, board: Dict[str, Any], desc: Descriptor) -> None:
@@ -177,11 +183,48 @@ class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
         self._desc = desc
         self._cbs: Dict[str, List[Callable[..., Any]]] = {"link_lost": [], "link_restored": [], "reconnect": []}
         self._subs: List[int] = []
-        AsyncRoutedHub.__init__(self)
         self._sessions: Any = board.get("sessions")  # the service's count of device sessions
         self._since: Optional[int] = None  # the service's last event id when this client connected
         self._delivered: Dict[str, int] = {}  # per event channel: the newest id a listener here had
         self._closed = False
+        self._loop = asyncio.get_running_loop()
+        self._hub: Optional[RemoteHub] = None
+        #: where hub channel handlers run (the sync face sets its dispatcher thread)
+        loop = self._loop
+        self.hub_dispatch: Callable[[Callable[[], None]], Any] = lambda fn: loop.call_soon_threadsafe(fn)
+
+    # ------------------------------------------------------------------------- hub channels
+
+    def _hub_side(self) -> Any:
+        if self._hub is None:
+            self._hub = RemoteHub(self, HubChannels(), self._loop)
+        return self._hub
+
+    async def provide_hub(self, hub: Optional[HubChannels]) -> None:
+        """Offer ``hub`` to the board through the service (``connect(name, hub=...)``): raises as a
+        direct connect for a channel the board expects otherwise, HubConflict naming both when
+        another provider holds one."""
+        if hub is None:
+            return
+        if self._hub is not None:
+            self._hub.close()
+        self._hub = side = RemoteHub(self, hub, self._loop)
+        try:
+            held = tuple(str(r.get("channel")) for r in await side.fetch_status() if r.get("by"))
+            side.check_all(held)
+            await side.start()
+        except BaseException:
+            side.close()
+            raise
+        await side.fetch_binding()
+
+    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        """Return once every hub event given to :meth:`notify` is queued and stored at the service
+        (it then reaches the board exactly once); :class:`hubwire.Timeout` after ``timeout`` s."""
+        from ..errors import Timeout
+
+        if self._hub is not None and not await self._hub.wait_notified(timeout):
+            raise Timeout(f"{len(self._hub.queue)} hub events still wait for hubwire serve after {timeout} s")
 
     async def _watch(self) -> None:
         sub, _ = await self.conn.subscribe("boards", self._board_changed, board=self.key)
@@ -309,12 +352,43 @@ class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
         raw = await self.control_raw(ch, payload, timeout)
         return None if raw is None or ch.returns is None else ch.returns.decode(raw)
 
-    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
-        """Missions are not routed through the service: a clear error (after checking the name)."""
-        from ..job import missions_not_routed
+    # ---------------------------------------------------------- missions (remote_missions.py)
 
-        ops.mission_start(self._desc, name, goal)  # a non-mission or a bad goal says so first
-        raise missions_not_routed()
+    async def start_run(self, name: str, goal: Any = None, *, timeout: Optional[float] = None,
+                        run_id: Optional[str] = None, dispatch: Any = None) -> "tuple[Any, str]":
+        """Start mission ``name`` through the service (goal checked here first, as direct) and
+        follow the run: its local record and run id."""
+        from .remote_missions import follow_run
+
+        ch, payload = ops.mission_start(self._desc, name, goal)
+        extra = {} if run_id is None else {"run_id": run_id}
+        reply = await self.conn.request("start", board=self.key, channel=ch.name, raw=payload[1:].hex(),
+                                        timeout=timeout, **extra)
+        rid = str(reply["run"]["run_id"])
+        return await (follow_run(self, rid) if dispatch is None else follow_run(self, rid, dispatch))
+
+    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None,
+                    run_id: Optional[str] = None) -> Any:
+        """As :meth:`AsyncDevice.start`; the run belongs to the service (``job.run_id`` names it
+        there: a start repeated with the same ``run_id`` starts nothing new)."""
+        from .remote_missions import AsyncRemoteJob
+
+        rec, rid = await self.start_run(name, goal, timeout=timeout, run_id=run_id)
+        return AsyncRemoteJob(self, rec, rid)
+
+    async def follow(self, run_id: str) -> Any:
+        """The job of a run the service has (started by any client), from its first progress value."""
+        from .remote_missions import AsyncRemoteJob, follow_run
+
+        rec, rid = await follow_run(self, run_id)
+        return AsyncRemoteJob(self, rec, rid)
+
+    async def cancel_run(self, run_id: str, *, timeout: Optional[float] = None) -> bool:
+        return bool((await self.conn.request("cancel", run_id=run_id, timeout=timeout))["cancelled"])
+
+    async def runs(self) -> List[Dict[str, Any]]:
+        """The runs the service keeps of this board (docs/SERVICE.md "Missions")."""
+        return list((await self.conn.request("runs", board=self.key))["runs"])
 
     def sample(self, ch: Channel, s: Dict[str, Any]) -> StreamSample:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),
@@ -358,6 +432,8 @@ class AsyncRemoteDevice(AsyncRoutedHub, AsyncBoardAPI):
 
     async def close(self) -> None:
         self._closed = True
+        if self._hub is not None:
+            self._hub.close()
         await self.conn.close()
 
     async def __aenter__(self) -> "AsyncRemoteDevice":

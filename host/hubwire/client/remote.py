@@ -1,8 +1,7 @@
 """The synchronous face of a board through the service: :class:`RemoteSession` stands in for
 :class:`hubwire.session.Session` under a :class:`RemoteDevice` (a :class:`hubwire.Device`), so
 ``hubwire.connect("rover")`` gives the same methods, attributes, streams and events as a direct
-connection (:class:`hubwire.board.BoardAPI`); what needs the board's own session (hub channels a
-client declares, missions) raises :class:`hubwire.NotRoutedYet`.
+connection (:class:`hubwire.board.BoardAPI`), hub channels and missions included.
 
 It runs an :class:`AsyncRemoteDevice` on the process's shared hub loop; callbacks run on a
 dispatcher thread of their own, as a direct session's do.
@@ -14,8 +13,6 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from ..descriptor import Channel, Descriptor
 from ..device import Device
 from ..errors import HubwireError
-from ..hub import HubChannels
-from .routed_hub import hub_event_payload, hub_not_routed
 from ..session import LinkHealth, State, Stats, StreamSample, ThreadSubscription
 from ..session.events import QueueSink
 from ..session.runner import ThreadDispatcher, release_loop, run_sync
@@ -42,6 +39,21 @@ class RemoteSession:
         self._subs: Dict[int, int] = {}  # id(subscription or sink) -> service subscription
         self._cbs: List[Tuple[Any, Callable[..., Any], int]] = []
         self._removers: Dict[Tuple[str, int], Callable[[], None]] = {}
+        # hub channel handlers run on the dispatcher thread, as a direct session's
+        remote.hub_dispatch = lambda fn: self._dispatcher(fn)
+
+    @property
+    def core(self) -> Any:
+        """What :class:`hubwire.Device` reaches for hub channels (client/hub_client.py)."""
+        return self.remote._hub_side()
+
+    def hub_status(self) -> List[Dict[str, Any]]:
+        """Who provides each hub channel of the board, and its binding (op ``hub``)."""
+        return self._run(self.remote._hub_side().fetch_status())  # type: ignore[no-any-return]
+
+    def provide_hub(self, hub: Any) -> None:
+        """``connect(name, hub=...)``: offer ``hub`` to the board through the service."""
+        self._run(self.remote.provide_hub(hub))
 
     @property
     def descriptor(self) -> Optional[Descriptor]:
@@ -70,11 +82,6 @@ class RemoteSession:
     def board_id(self, timeout: Optional[float] = None) -> Optional[str]:
         return self._run(self.remote.board_id(timeout=timeout))  # type: ignore[no-any-return]
 
-    def notify(self, name: str, value: Any) -> None:
-        """Hub event ``name``, checked here and handed to the service; returns once it is stored."""
-        raw = hub_event_payload(self.remote.descriptor, name, value)
-        self._run(self.remote.conn.request("notify", board=self.remote.key, channel=name, raw=raw.hex()))
-
     def _channel(self, id: int) -> Channel:
         ch = self.remote.descriptor.by_id(id)
         if ch is None:
@@ -88,6 +95,24 @@ class RemoteSession:
         ch = self._channel(id)
         raw = self._run(self.remote.control_raw(ch, payload, timeout))
         return Frame(m.ACK, 0, id, b"") if raw is None else Frame(m.RESPONSE, 0, id, raw)
+
+    # ----------------------------------------------------------------------------- missions
+
+    def start_mission(self, name: str, goal: Any, timeout: Optional[float] = None,
+                      run_id: Optional[str] = None) -> Any:
+        """``dev.start`` through the service: a :class:`RemoteJob` (status callbacks on the dispatcher)."""
+        from .remote_missions import RemoteJob
+
+        rec, rid = self._run(self.remote.start_run(name, goal, timeout=timeout, run_id=run_id,
+                                                   dispatch=self._dispatcher))
+        return RemoteJob(self, rec, rid)
+
+    def follow(self, run_id: str) -> Any:
+        """The job of a run the service has, from its first progress value."""
+        from .remote_missions import RemoteJob, follow_run
+
+        rec, rid = self._run(follow_run(self.remote, run_id, self._dispatcher))
+        return RemoteJob(self, rec, rid)
 
     # ------------------------------------------------------------------------------ streams
 
@@ -199,35 +224,11 @@ class RemoteSession:
 
 class RemoteDevice(Device):
     """:class:`hubwire.Device` through ``hubwire serve`` (``hubwire.connect("rover")``): the same
-    :class:`hubwire.board.BoardAPI`; the hub-channel methods go through the service where it can."""
+    :class:`hubwire.board.BoardAPI`; hub channels go through the service (client/hub_client.py)."""
 
     __slots__ = ()
     _session: Any  # a RemoteSession
 
-    def _hub_side(self) -> Any:
-        raise hub_not_routed()
-
-    @property
-    def hub(self) -> HubChannels:
-        """Empty: hub channels a client declares are not routed yet (declaring raises NotRoutedYet)."""
-        return self._session.remote.hub  # type: ignore[no-any-return]
-
     def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
         """The id the service knows the board by (its USB serial number, else its own id, else None)."""
         return self._session.board_id(timeout)  # type: ignore[no-any-return]
-
-    def notify(self, name: str, value: Any) -> None:
-        """Send hub event ``name``: checked here, then stored by the service when this returns; the
-        service delivers it exactly once, in order, also across its own restart."""
-        self._session.notify(name, value)
-
-    def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
-        """Returns at once: every :meth:`notify` returned once the service had stored its event."""
-
-    @property
-    def notifications_pending(self) -> int:
-        """0: the service holds every hub event once :meth:`notify` returned."""
-        return 0
-
-    def hub_binding(self) -> Dict[str, str]:
-        raise hub_not_routed()

@@ -8,7 +8,7 @@ import os
 from typing import Any, Dict, Optional, cast
 
 from ..aio import _Connecting
-from ..errors import HubwireError, NoDeviceFound, UnknownBoard
+from ..errors import NoDeviceFound, UnknownBoard
 from ..transport import SerialTransport
 from .connection import AsyncRemoteDevice, Connection, connect
 from .protocol import ServiceNotRunning, socket_path
@@ -56,26 +56,12 @@ async def route_async(url: Optional[str], timeout: float) -> Optional[AsyncRemot
         return None  # no service, or a port it does not own
 
 
-def _direct_for_hub_channels(url: Optional[str], kwargs: Dict[str, Any]) -> bool:
-    """Hub channels (``hub=``) are answered by the program that declares them, so it opens the port
-    itself: True to open it directly; an error for a board name, which only the service knows."""
-    if kwargs.get("hub") is None:
-        return False
-    if url is not None and not looks_like_port(url):
-        raise HubwireError(f"{url!r} names a board of hubwire serve, but hub channels (hub=...) are answered by "
-                           "the program that owns the board's port: connect to its port instead, with the "
-                           "service not serving it")
-    return True
-
-
 def open_routed(url: Optional[str], timeout: float, kwargs: Dict[str, Any]) -> Any:
     """A :class:`RemoteDevice` (over a :class:`RemoteSession`) when the board is reached through the
     service, else None."""
     from ..session.runner import acquire_loop, release_loop, run_sync
     from .remote import RemoteDevice, RemoteSession
 
-    if _direct_for_hub_channels(url, kwargs):
-        return None
     if _enabled() and socket_path() is None and (url is None or looks_like_port(url)):
         return None  # the common case without a service: no loop thread started for nothing
     loop = acquire_loop()
@@ -91,6 +77,11 @@ def open_routed(url: Optional[str], timeout: float, kwargs: Dict[str, Any]) -> A
     for name in _CALLBACKS:
         if kwargs.get(name) is not None:
             session._add(name[3:], kwargs[name])
+    try:
+        session.provide_hub(kwargs.get("hub"))  # the board's hub channels, through the service
+    except BaseException:
+        session.close()
+        raise
     return RemoteDevice(cast(Any, session))  # a Device over the stand-in for its Session
 
 
@@ -103,12 +94,16 @@ class RoutedConnecting(_Connecting):
         super().__init__(None, timeout, kwargs)  # type: ignore[arg-type]
 
     async def _open(self) -> Any:
-        direct = _direct_for_hub_channels(self._url, self._kwargs)
-        remote = None if direct else await route_async(self._url, self._timeout)
+        remote = await route_async(self._url, self._timeout)
         if remote is not None:
             for name in _CALLBACKS:
                 if self._kwargs.get(name) is not None:
                     remote.on(name[3:], self._kwargs[name])
+            try:
+                await remote.provide_hub(self._kwargs.get("hub"))  # hub channels through the service
+            except BaseException:
+                await remote.close()
+                raise
             return remote
         from ..ports import find_port
 

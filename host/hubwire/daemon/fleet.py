@@ -29,6 +29,7 @@ from ..descriptor import Descriptor
 from ..errors import LinkLost, UnknownBoard
 from ..transport import SerialTransport
 from . import durable
+from .hub_providers import HubProviders
 from .ports import PortInfo, PortScanner
 from .keys import board_key
 
@@ -124,6 +125,8 @@ class Fleet:
         self.store = store
         #: ports whose kept hub session the next connection resumes (loaded once, then only shrinks)
         self._resumable: Optional[Set[str]] = None
+        #: who answers each board's hub channels (clients, the MQTT bridge)
+        self.hub = HubProviders(self)
 
     # --------------------------------------------------------------------------- the FLEET.md API
 
@@ -338,6 +341,7 @@ class Fleet:
         self._by_port[real] = board
         # first: the events that came before it are stored (kept hub events go out before new ones)
         durable.attach(self.store, board.key, dev, info.path)
+        self.hub.attach(board.key, dev)
         # the service always listens, so an event nobody else hears is counted (and kept by the store)
         dev.on("*", lambda _ev, b=board: setattr(b, "events", b.events + 1))
         for kind in ("link_lost", "link_restored", "reconnect"):

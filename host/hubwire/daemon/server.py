@@ -16,7 +16,7 @@ from typing import Any, Awaitable, Callable, Dict, Optional
 from .. import __version__
 from ..errors import HubwireError, InvalidValue, LinkLost, StreamEnded
 from ..wire.messages import NakCode
-from . import durable_ops
+from . import durable_ops, hub_ops, mission_ops
 from .fleet import Fleet
 from ..client.protocol import MAX_LINE, PROTOCOL, Busy, Usage, board_json, encode, error_json, jsonable
 from ..client.sockdir import ensure_dir
@@ -288,6 +288,17 @@ class _Client:
         """A hub event for the board (PROTOCOL.md 10.3): answered once queued (and stored)."""
         return durable_ops.notify(self.fleet, msg)
 
+    # ----------------------------------------------------------- hub channels (hub_ops.py)
+
+    async def op_provide(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.provide(self, msg)
+
+    async def op_hub_answer(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.hub_answer(self, msg)
+
+    async def op_hub(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return hub_ops.hub_status(self, msg)
+
     async def op_events(self, msg: Dict[str, Any]) -> Dict[str, Any]:
         self._check_sub(msg)
         if self.fleet.store is not None:  # events with ids, and a resume point (``after``)
@@ -313,6 +324,20 @@ class _Client:
                 evs = dev.events(*names)
         finally:
             evs.close()
+
+    # ------------------------------------------------------------- missions (mission_ops.py)
+
+    async def op_start(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return await mission_ops.start(self, msg)
+
+    async def op_mission(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return await mission_ops.follow(self, msg)
+
+    async def op_cancel(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return await mission_ops.cancel(self, msg)
+
+    async def op_runs(self, msg: Dict[str, Any]) -> Dict[str, Any]:
+        return await mission_ops.runs(self, msg)
 
 
 _OPS = [n[3:] for n in dir(_Client) if n.startswith("op_")]

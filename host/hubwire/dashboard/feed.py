@@ -62,6 +62,14 @@ class BoardFeed:
         self.event_count = 0
         self._streams: Dict[str, "asyncio.Task[None]"] = {}
         self._tasks: List["asyncio.Task[None]"] = []
+        #: the service's hub providers (``fleet.hub``, daemon/hub_providers.py), None without a service
+        self.providers: Any = None
+
+    def hub_providers(self) -> Dict[str, str]:
+        """Who provides each hub channel the board uses, through the service ("" when nobody)."""
+        if self.providers is None:
+            return {}
+        return {str(r["channel"]): str(r.get("by") or "") for r in self.providers.status(self.key)}
 
     def start(self) -> None:
         for name, rec in self.records.items():
@@ -207,6 +215,7 @@ class Feeds:
             asyncio.ensure_future(old.stop())
         self._generation += 1
         feed = BoardFeed(board.key, dev, self._generation, self.stream_hz, self.rates)
+        feed.providers = getattr(self.fleet, "hub", None)
         self.feeds[board.key] = feed
         feed.start()
 

@@ -91,7 +91,7 @@ def _page(feeds: Feeds) -> None:
                     if v is not None:
                         column.remove(v.card)
                     with column:
-                        views[b.key] = BoardView(b, feed)
+                        views[b.key] = BoardView(b, feed, feeds.fleet)
                     views[b.key].card.move(column, target_index=keys.index(b.key) + 1)
                 views[b.key].refresh(b, visible)
             empty.set_visibility(not boards)

@@ -14,6 +14,7 @@ from .attrs import tag
 from .feed import BoardFeed
 from .model import fmt_value
 from .view_channel import PlotView, channel_views
+from .view_mission import MissionView
 
 __all__ = ["BoardView", "hub_channels"]
 
@@ -40,14 +41,14 @@ def hub_binding(feed: BoardFeed) -> Dict[str, str]:
 
 
 def _access(ch: Channel) -> str:
-    words = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream"}
+    words = {"r": "read", "w": "write", "c": "call", "e": "event", "s": "stream", "m": "mission"}
     return ", ".join(words[a] for a in ch.access if a in words)
 
 
 class BoardView:
     """A board's card; :meth:`refresh` updates what changed since the last call."""
 
-    def __init__(self, board: Any, feed: Optional[BoardFeed]) -> None:
+    def __init__(self, board: Any, feed: Optional[BoardFeed], fleet: Any = None) -> None:
         self.key = board.key
         self.feed = feed
         self.generation = feed.generation if feed is not None else 0
@@ -84,9 +85,12 @@ class BoardView:
                             ui.label(ch.description).classes("text-xs italic")
                         for v in channel_views(feed, ch):
                             (self.plots if isinstance(v, PlotView) else self.values).append(v)
+                        if ch.mission and fleet is not None:  # start form, progress bar, cancel
+                            self.values.append(MissionView(feed, ch, fleet))
             hub = hub_channels(feed)
             if hub:
                 binding = hub_binding(feed)
+                by = feed.hub_providers() if feed is not None else {}
                 with ui.expansion(f"hub channels it uses ({len(hub)})", value=True).classes("w-full"):
                     for ch in hub:
                         state = binding.get(ch.name, "-")
@@ -95,6 +99,8 @@ class BoardView:
                             ui.label(f"{_access(ch)}, {ch.type_name}").classes("text-gray-600")
                             tag(ui.label("bound here" if state == "ok" else f"not bound here: {state}"),
                                 hub=f"{board.key}.{ch.name}")
+                            if by.get(ch.name):  # through hubwire serve: which client, or MQTT
+                                ui.label(f"provided by {by[ch.name]}").classes("text-gray-600")
             events = [c.name for c in d.channels if c.is_event]
             with ui.expansion(f"events ({', '.join(events) or 'none declared'})", value=True).classes("w-full"):
                 self.events = tag(ui.column().classes("gap-0 font-mono text-sm max-h-64 overflow-auto"),

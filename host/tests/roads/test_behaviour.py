@@ -2,10 +2,7 @@
 opens the port) and on a routed one (``hubwire.connect("name")`` through ``hubwire serve``), on the C++
 emulators, and asserts what the API promises; errors must have the same type and text on both roads.
 
-Left out until the service routes them (they pass on the direct road in tests/test_hub_channels.py and
-tests/test_missions.py): hub channels a client provides (``provide`` / ``accept`` / ``action``,
-``hub_binding``) and missions (``start``). Both raise :class:`hubwire.NotRoutedYet` when routed
-(tests/roads/test_not_routed.py).
+Hub channels a client provides and missions included: nothing may be missing on one road.
 """
 from __future__ import annotations
 
@@ -287,3 +284,60 @@ def test_closing_ends_streams_and_event_iterators_alike(both: Callable[..., Dict
         dev.close()
         seen[road] = (events.get(timeout=5), list(iter(events)), _outcome(lambda: [next(samples) for _ in range(100)]))
     assert seen["direct"] == seen["routed"] == (None, [], (hubwire.LinkLost, "session closed"))
+
+
+def test_a_mission_runs_the_same_on_both_roads(board: Open) -> None:
+    """Start, progress in order, one result; a failure with its code; a refused goal (Soak's `count`:
+    progress 1, 2, ... below n, newer values replacing unsent ones; result n * 1000 + its run)."""
+    dev = board("soak", hub_later=True)
+    job = dev.start("count", 6)
+    progress = list(job.feedback(timeout=30))
+    result = job.result(timeout=30)
+    assert progress == sorted(set(progress)) and set(progress) <= set(range(1, 6)), progress
+    assert result // 1000 == 6 and job.status == "succeeded"
+    failing = dev.start("count", 999)
+    with pytest.raises(hubwire.MissionFailed) as failed:
+        failing.result(timeout=30)
+    assert failed.value.code == 9
+    with pytest.raises(hubwire.HubwireError) as refused:
+        dev.start("count", 0).result(timeout=30)
+    assert type(refused.value).__name__ in ("NakError", "MissionFailed"), refused.value
+
+
+def test_hub_channels_a_program_provides_bind_and_answer(board: Open) -> None:
+    """Soak writes `tally` (u32) and calls `bump` (u32 -> u32) on the hub: the same HubChannels bind
+    on both roads, every tally the board saw acknowledged reached the handler once and in order,
+    and every bump came back right."""
+    tallies: List[int] = []
+    hub = hubwire.HubChannels("behaviour")
+    hub.accept("tally", tallies.append)  # an int takes the sketch's u32
+    hub.action("bump", lambda n: n + 1)
+    hub.event("tick")
+    dev = board("soak", hub=hub)
+    deadline = time.monotonic() + 60
+    while dev.hub_binding() != {"tally": "ok", "bump": "ok", "tick": "ok"}:
+        assert time.monotonic() < deadline, dev.hub_binding()
+        time.sleep(0.05)
+    dev.hub_load = True
+    while not (dev.tally_acked >= 10 and dev.bump_ok >= 3):
+        assert time.monotonic() < deadline, (dev.tally_acked, dev.bump_ok)
+        time.sleep(0.05)
+    dev.hub_load = False
+    while dev.tally_acked + dev.tally_failed != dev.tally_token:
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    assert tallies == sorted(set(tallies)) and dev.tally_acked <= len(tallies)
+    assert dev.bump_wrong == 0
+
+
+def test_every_implementation_names_the_interface() -> None:
+    from hubwire.aio import AsyncDevice
+    from hubwire.board import BOARD_METHODS, AsyncBoardAPI, BoardAPI
+    from hubwire.client.connection import AsyncRemoteDevice
+    from hubwire.client.remote import RemoteDevice
+
+    for cls, api in ((hubwire.Device, BoardAPI), (RemoteDevice, BoardAPI), (AsyncDevice, AsyncBoardAPI),
+                     (AsyncRemoteDevice, AsyncBoardAPI)):
+        assert api in cls.__mro__, cls  # so mypy checks its signatures against the interface
+        missing = [m for m in BOARD_METHODS if not hasattr(cls, m)]
+        assert not missing, (cls, missing)

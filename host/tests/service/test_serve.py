@@ -258,18 +258,17 @@ def test_watch_through_the_service_sees_events_another_client_caused(serve: Serv
         watch.wait(10)
 
 
-def test_hub_channels_are_not_routed_through_the_service(serve: Serve, emulators: Callable[[str], Emulator]) -> None:
-    """The program that declares hub channels answers the device itself: a board name (which only the
-    service knows) is refused with the reason, a port opens directly (and the service holds it)."""
-    from hubwire import HubChannels, HubwireError
-    from hubwire.diagnose import PortOpenError
+def test_hub_channels_are_routed_through_the_service(serve: Serve, emulators: Callable[[str], Emulator]) -> None:
+    """``hub=`` no longer forces a direct open (docs/SERVICE.md "Hub channels"): a board name or a
+    port the service owns reach the board through the service, hub channels and all (the Rover
+    uses none: nothing to provide, and no PortBusy)."""
+    from hubwire import HubChannels
 
     emu = emulators("a")
     serve.wait_state("rover", "ready")
     hub = HubChannels()
     hub.provide("setpoint", 21.5, type="f32")
-    with pytest.raises(HubwireError, match="hub channels"):
-        hubwire.connect("rover", hub=hub, timeout=5)
-    with pytest.raises(PortOpenError) as busy:
-        hubwire.connect(emu.link, hub=hub, timeout=5)
-    assert busy.value.kind == "PortBusy"
+    for url in ("rover", emu.link):
+        with hubwire.connect(url, hub=hub, timeout=5) as dev:
+            assert dev.url == "service:rover" and dev.hub is hub
+            assert dev.hub_binding() == {}

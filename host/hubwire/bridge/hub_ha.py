@@ -1,0 +1,113 @@
+"""Home Assistant discovery for the hub channels the MQTT bridge backs (docs/MQTT.md "Hub channels"):
+
+| the board ... | entity | state | command |
+| --- | --- | --- | --- |
+| reads a number (`setpoint`) | `number` (a slider within its range, else a box) | the value topic | `.../set` |
+| reads a bool | `switch` | the value topic | `.../set` |
+| writes a value (`report`) | `sensor` (`binary_sensor` for a bool) | the value topic | |
+| calls an action (`alarm`) | `event` (each call) | `.../call` | |
+| takes events (`mode`) | `number` (a box: sending one is `number.set_value`), `select` for a bool | the value topic (last sent) | `.../set` |
+
+Entities join the board's device (``hubwire_<key>``) with unique ids ``hubwire_<key>--hub-<channel>``
+and object ids ``hub-<channel>``: no board channel has a ``-`` in its name, so none collides.
+"""
+from __future__ import annotations
+
+from typing import Any, Dict, List, Optional, Tuple
+
+from .. import __version__
+from ..descriptor import Channel, Descriptor
+from ..wire.scalars import INTEGER_TYPES, NUMERIC_TYPES, SCALARS
+from .topics import OFFLINE, ONLINE, Topics, dumps, level
+
+__all__ = ["hub_discovery", "entity"]
+
+ORIGIN = {"name": "hubwire", "sw_version": __version__,
+          "support_url": "https://github.com/hubwire/hubwire/blob/main/docs/MQTT.md"}
+
+
+def _scalar(ch: Channel) -> Optional[str]:
+    t = ch.codec.type_obj.get("t")
+    return str(t) if ch.codec.kind == "scalar" else None
+
+
+def _range(ch: Channel) -> Tuple[Optional[float], Optional[float]]:
+    t = _scalar(ch)
+    lo, hi = ch.min, ch.max
+    if t in INTEGER_TYPES:
+        lo = SCALARS[t][2] if lo is None else lo
+        hi = SCALARS[t][3] if hi is None else hi
+    return lo, hi
+
+
+def entity(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id: Optional[str],
+           exp: Channel) -> Optional[Tuple[str, Dict[str, Any]]]:
+    """``(platform, config)`` for hub channel ``exp`` of board ``key``, or None (no entity)."""
+    node = topics.board(key).rpartition("/")[2]
+    value = topics.board(key, "hub", level(exp.name))
+    t = _scalar(exp)
+    dev: Dict[str, Any] = {"identifiers": [f"hubwire_{node}"], "name": key, "manufacturer": "Hubwire",
+                           "model": desc.name}
+    if board_id:
+        dev["serial_number"] = board_id
+    cfg: Dict[str, Any] = {
+        "name": f"hub {exp.name}", "unique_id": f"hubwire_{node}--hub-{level(exp.name)}", "device": dev,
+        "origin": ORIGIN, "availability_mode": "all",
+        "availability": [{"topic": topics.service_status(service_id), "payload_available": ONLINE,
+                          "payload_not_available": OFFLINE}],
+    }
+    lo, hi = _range(exp)
+    kind: Optional[str] = None
+    if "c" in exp.access:
+        kind = "event"
+        cfg.update(state_topic=value + "/call", event_types=[exp.name])
+    elif "e" in exp.access or "r" in exp.access:
+        cfg["command_topic"] = value + "/set"
+        cfg["state_topic"] = value
+        if t == "bool":
+            kind = "switch" if "r" in exp.access else "select"
+            if kind == "switch":
+                cfg.update(payload_on="true", payload_off="false", state_on="true", state_off="false")
+            else:
+                cfg["options"] = ["false", "true"]
+        elif t in NUMERIC_TYPES:
+            kind = "number"
+            ranged = exp.min is not None and exp.max is not None
+            low, high = float(lo if lo is not None else -1e9), float(hi if hi is not None else 1e9)
+            cfg.update(min=low, max=high, mode="slider" if ranged else "box",
+                       step=1 if t in INTEGER_TYPES else (max(0.001, round((high - low) / 100, 3)) if ranged else 0.1))
+        elif exp.codec.kind == "str":
+            kind = "text"
+            cfg["value_template"] = "{{ value_json }}"
+            cfg["command_template"] = "{{ value | tojson }}"
+    elif "w" in exp.access:
+        cfg["state_topic"] = value
+        if t == "bool":
+            kind = "binary_sensor"
+            cfg.update(payload_on="true", payload_off="false")
+        elif t in NUMERIC_TYPES or exp.codec.kind == "str":
+            kind = "sensor"
+            if t in NUMERIC_TYPES:
+                cfg["state_class"] = "measurement"
+            else:
+                cfg["value_template"] = "{{ value_json }}"
+    if kind is None:
+        return None
+    if exp.unit and kind in ("sensor", "number"):
+        cfg["unit_of_measurement"] = exp.unit
+    return kind, cfg
+
+
+def hub_discovery(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id: Optional[str],
+                  names: List[str]) -> List[Tuple[str, str]]:
+    """``(config topic, payload)`` for the hub channels ``names`` of a board (retained)."""
+    out: List[Tuple[str, str]] = []
+    node = topics.board(key).rpartition("/")[2]
+    for exp in desc.hub:
+        if exp.name not in names:
+            continue
+        got = entity(topics, service_id, key, desc, board_id, exp)
+        if got is not None:
+            kind, cfg = got
+            out.append((f"{topics.discovery_prefix}/{kind}/{node}/hub-{level(exp.name)}/config", dumps(cfg)))
+    return out

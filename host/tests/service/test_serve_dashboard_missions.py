@@ -1,0 +1,91 @@
+"""The dashboard's mission controls in Debian's chromium (Playwright), on `hubwire serve --http` with
+the missions emulator (examples/Missions): the start form takes the goal of the declared type and
+range, the progress bar fills, a second start while one runs shows BUSY, cancel ends the run, and a
+run started by another client (`hubwire call`) shows on the page too."""
+from __future__ import annotations
+
+import os
+import re
+import sys
+from typing import Any
+
+import pytest
+
+from conftest import Emulator
+
+from .conftest import HOST, Serve, wait_for
+
+if sys.version_info < (3, 10):
+    pytest.skip("NiceGUI 3 and Playwright need Python 3.10+", allow_module_level=True)
+import playwright.sync_api as playwright_api  # noqa: E402  (after the version check)
+
+from test_dashboard_browser import CHROMIUM, WAIT_MS, _free_port, field, sel, wait_text  # noqa: E402
+
+MISSIONS_EMULATOR = os.path.join(HOST, "..", "build", "emulator", "hubwire-missions-emulator")
+M = "missions.drive"
+
+
+def test_start_progress_cancel_and_result_in_the_browser(boards_dir: str, tmp_path: Any,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    if not os.access(CHROMIUM, os.X_OK):
+        pytest.fail(f"{CHROMIUM} not found: bash tools/setup.sh installs Debian's chromium", pytrace=False)
+    if not os.access(MISSIONS_EMULATOR, os.X_OK):
+        pytest.fail(f"{MISSIONS_EMULATOR} missing: build it with `make emulator`", pytrace=False)
+    http = _free_port()
+    sock = str(tmp_path / "run" / "hubwire.sock")
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
+               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    monkeypatch.setenv("HUBWIRE_SOCKET", sock)
+    serve = Serve(boards_dir, sock, env, str(tmp_path / "serve.log"), ["--http", str(http)])
+    emu = Emulator(MISSIONS_EMULATOR, os.path.join(boards_dir, "missions"))
+    emu.start()
+    serve.start()
+    try:
+        serve.wait_state("missions", "ready")
+        url = wait_for(lambda: re.search(r"dashboard at (http://localhost:%d/\?token=\S+)" % http, serve.log_text()),
+                       what="the dashboard")[1]
+        with playwright_api.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.set_default_timeout(WAIT_MS)
+            page.goto(url)
+            wait_text(page, sel("state", "missions"), "^ready$")
+            wait_text(page, sel("run", M), "^no run yet$")
+            # a goal outside the declared range is refused by the hub; nothing starts
+            serve.cli("set", "missions", "speed", "2")
+            field(page, "goal", M).fill("20")
+            page.locator(sel("start", M)).click()
+            wait_text(page, sel("mission-error", M), r"outside the declared range")
+            # a drive of 1 m: the bar fills, the result shows
+            field(page, "goal", M).fill("1")
+            page.locator(sel("start", M)).click()
+            wait_text(page, sel("run", M), r"^run 1 \([0-9a-f]{16}\): succeeded$")
+            wait_text(page, sel("mission-result", M), r"^-> 1 m$")
+            assert page.locator(sel("progress", M)).get_attribute("data-hw-fraction") == "1"
+            assert page.locator(sel("mission-error", M)).inner_text() == ""
+            # a slow drive: progress shows, a second start is BUSY, cancel ends it
+            serve.cli("set", "missions", "speed", "0.1")
+            field(page, "goal", M).fill("10")
+            page.locator(sel("start", M)).click()
+            wait_text(page, sel("run", M), r"^run 2 .*: running$")
+            wait_text(page, sel("progress-value", M), r"^0\.\d+ m$")
+            page.wait_for_function(f"Number(document.querySelector('{sel('progress', M)}')"
+                                   ".getAttribute('data-hw-fraction')) > 0")
+            page.locator(sel("start", M)).click()
+            wait_text(page, sel("mission-error", M), r"^NAK BUSY")
+            wait_text(page, sel("run", M), r"^run 2 .*: running$")  # the run that goes is still shown
+            page.locator(sel("cancel", M)).click()
+            wait_text(page, sel("run", M), r"^run 2 .*: cancelled$")
+            wait_text(page, sel("mission-result", M), r"run 2 was cancelled")
+            # a run another client starts shows here too
+            serve.cli("set", "missions", "speed", "2")
+            serve.cli("call", "missions", "drive", "0.5")
+            wait_text(page, sel("run", M), r"^run 3 .*: succeeded$")
+            wait_text(page, sel("mission-result", M), r"^-> 0\.5 m$")
+            browser.close()
+    finally:
+        status = serve.stop()
+        emu.stop()
+    assert status == 0, serve.log_text()
