@@ -121,7 +121,7 @@ def run(links: List[str], rates: List[str], window: float, label: str) -> Dict[s
             on[0] = False
             s1 = page.evaluate(samples)
             states = page.evaluate("[...document.querySelectorAll('[data-hw-state]')].map(e => e.innerText)")
-            plots = page.evaluate("[...document.querySelectorAll('[data-hw-channel] [_echarts_instance_]')].map(e => e.getBoundingClientRect())"
+            plots = page.evaluate("[...document.querySelectorAll('[data-hw-plot] [_echarts_instance_]')].map(e => e.getBoundingClientRect())"
                                   ".filter(r => r.top < innerHeight + 300 && r.bottom > -300).length")
             browser.close()
         wall = w1 - w0

@@ -51,6 +51,8 @@ def test_a_crafted_board_is_shown_as_text_and_runs_nothing(page: Any) -> None:
     page.locator("[data-hw-board]").first.scroll_into_view_if_needed()
     for exp in page.locator(".q-expansion-item__container > .q-item").all():
         exp.click()  # open the descriptor too
+    page.locator("[data-hw-channel]").first.get_by_text("x", exact=True).hover()  # its hover text: the description
+    playwright_api.expect(page.locator(".q-tooltip")).to_contain_text("<img src=x", timeout=WAIT_MS)
     page.wait_for_timeout(1000)  # let anything that would run, run
     assert page.evaluate("window.hwPwned") is None
     assert page.locator("[data-pwn]").count() == 0

@@ -47,7 +47,7 @@ async def until(pred: Callable[[], Any], what: str) -> None:
         await asyncio.sleep(0.02)
 
 
-def test_a_board_unplugged_loses_its_feed_and_plugged_again_gets_a_new_one(emulator: Emulator,
+def test_a_board_unplugged_ends_its_feed_and_plugged_again_gets_a_new_one(emulator: Emulator,
                                                                            cache_dir: str) -> None:
     async def scenario() -> None:
         dev = await aio.connect(emulator.link, cache_dir=cache_dir)
@@ -62,20 +62,23 @@ def test_a_board_unplugged_loses_its_feed_and_plugged_again_gets_a_new_one(emula
         await dev.close()
         board.device, board.state, board.port = None, "unplugged", None
         fleet.changed(board)
-        await until(lambda: "rover" not in feeds.feeds, "the feed of the unplugged board to go")
+        # its feed ends, and keeps the last values for the page to show as such (not a blank card)
+        await until(lambda: getattr(feeds.feeds.get("rover"), "ended", False), "the feed of the unplugged board to end")
+        assert feeds.feeds["rover"] is first and first.records["imu"].value is not None
+        await until(lambda: all(t.done() for t in list(first._streams.values()) + first._tasks), "its tasks to end")
 
         dev2 = await aio.connect(emulator.link, cache_dir=cache_dir)
         board.device, board.state, board.port = dev2, "ready", emulator.link
         fleet.changed(board)
-        await until(lambda: "rover" in feeds.feeds, "a feed for the board plugged again")
+        await until(lambda: feeds.feeds["rover"] is not first, "a feed for the board plugged again")
         second = feeds.feeds["rover"]
         assert second is not first and second.dev is dev2 and second.generation > first.generation
         await until(lambda: second.records["imu"].count >= 2, "imu samples from the new session")
         emulator.bump()
         await until(lambda: second.event_count == 1, "the bumper event")
         assert [(e.n, e.name, e.value) for e in second.events] == [(1, "bumper", True)]
-        ok, msg = await second.write(dev2.channel("left"), 2.0)
-        assert not ok and msg.startswith("refused (OUT_OF_RANGE)")
+        ok, msg, code = await second.write_coded(dev2.channel("left"), 2.0)
+        assert (ok, code) == (False, "OUT_OF_RANGE") and msg == "not sent: left: 2.0 is outside the declared range -1..1"
         ok, msg = await second.call(dev2.channel("selftest"), 2)
         assert (ok, msg) == (True, "2")
         await feeds.stop()
@@ -125,3 +128,22 @@ def test_device_fleet_keys_boards_by_name_and_tells_their_state(emulator_path: s
     finally:
         a.stop()
         b.stop()
+
+
+def test_a_stream_the_board_cannot_grant_is_read_and_says_so_plainly(emulator: Emulator, cache_dir: str) -> None:
+    """The Rover streams four channels at once (HUBWIRE_MAX_STREAMS) and has five: one is read
+    instead, and its row says why without the protocol's word for it (it said "stream refused: BUSY")."""
+    async def scenario() -> None:
+        dev = await aio.connect(emulator.link, cache_dir=cache_dir)
+        feeds = Feeds(StandInFleet([Board("rover", "rover", None, emulator.link, "ready", dev)]), stream_hz=10.0)
+        await feeds.start()
+        try:
+            recs = feeds.feeds["rover"].records.values()
+            await until(lambda: any(r.read not in ("", "read") for r in recs), "a stream refused")
+            notes = [r.read for r in recs if r.read not in ("", "read")]
+            assert notes == ["read 10 times a second (the board has no stream free for it)"], notes
+        finally:
+            await feeds.stop()
+            await dev.close()
+
+    asyncio.run(scenario())

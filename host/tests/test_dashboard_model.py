@@ -142,3 +142,47 @@ def test_rates_from_the_command_line() -> None:
     for bad in (["0"], ["imu=fast"], ["imu=2000"]):
         with pytest.raises(ValueError):
             parse_rates(bad)
+
+
+def test_every_loss_seen_has_its_return_seen() -> None:
+    """After a loss and the board's return the link line reads "1 time, back after ..." (a return by
+    a reboot is a return too: the session's own counters said "link lost / restored 1 / 0")."""
+    link = model.LinkRecord()
+    link.observe("connecting", now=0.0)
+    link.observe("ready", now=1.0)
+    assert link.text() == "never"  # connecting at start is no loss
+    link.observe("lost", now=10.0)
+    link.observe("lost", now=11.0)
+    assert (link.lost, link.text()) == (1, "1 time, lost now")
+    link.observe("connecting", now=12.0)
+    link.observe("ready", now=12.5)
+    assert link.text() == "1 time, back after 2.5 s"
+    link.observe("connecting", now=13.0)  # a reboot noticed while linked: it reads its description again
+    link.observe("ready", now=13.2)
+    assert link.text() == "1 time, back after 2.5 s"
+    link.observe("unplugged", now=20.0)
+    link.observe("ready", now=21.0)
+    assert link.text() == "2 times, back after 1.0 s"
+
+
+def test_several_channels_share_one_time_axis_in_the_csv() -> None:
+    text = model.merge_csv([(["a"], [1.0, 3.0], [(1.0,), (3.5,)]), (["b[0]", "b[1]"], [2.0, 3.0], [(7.0, 8.0), (9.0, 1.0)])])
+    assert text.splitlines() == ["time,a,b[0],b[1]", "1.000000,1,,", "2.000000,,7,8", "3.000000,3.5,,",
+                                 "3.000000,,9,1"]
+
+
+def test_the_plot_starts_with_streamed_numbers_and_tiles_show_single_numbers() -> None:
+    ch = list(channels().values())
+    assert model.default_picks(ch) == ["speed", "pose"]  # streamable numbers, no booleans
+    assert model.key_channels(ch) == ["speed", "count", "led"]  # a unit first, then what is read
+
+
+def test_refusals_are_said_in_plain_words() -> None:
+    from hubwire.dashboard.words import NAK_WORDS, outcome
+    from hubwire.errors import NakError
+    from hubwire.wire.messages import NakCode
+
+    for code in NakCode:
+        text, name = outcome(NakError(int(code), "x"))
+        assert name == code.name and code.name not in text and "NAK" not in text, text
+    assert set(NAK_WORDS) == {c.name for c in NakCode}

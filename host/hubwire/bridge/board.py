@@ -312,6 +312,9 @@ class BoardBridge:
                 arg = parse_value(payload, empty_is_none=True)
                 arg = None if arg is None else ch.codec.from_json(arg)
                 result = await dev.call(chan, arg)
+                # the last call, retained: Home Assistant's entities of the action show it
+                self.bridge.outbox.put_latest(self.t.result(self.key, ch.name), dumps(
+                    {"arg": to_json(ch, arg), "value": to_json(ch, result, returns=True)}))
                 await reply.ok(value=to_json(ch, result, returns=True))
         except BadPayload:
             raise
@@ -322,7 +325,9 @@ class BoardBridge:
             kind = error_type(e) if isinstance(e, HubwireError) and error_type(e) != "Error" else "InvalidValue"
             await reply.error(op, chan, kind, str(e), **extra)
             return
-        if op == "set" and ch.readable:
+        if op == "set" and not ch.readable:
+            self.put_state(ch, value)  # a write-only channel's state: the value the board accepted
+        elif op == "set":
             try:
                 self.put_state(ch, await dev.read(chan))  # the state topic confirms the write
             except HubwireError:

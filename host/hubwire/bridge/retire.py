@@ -73,11 +73,13 @@ class Retired:
             return out
         for ch in desc.channels:
             out += sorted({f"{p}/{key}/state/{ch.name}", f"{p}/{key}/state/{level(ch.name)}"})
+            if ch.callable:
+                out.append(self.topics.result(key, ch.name))
         if self.topics.discovery_prefix:
             for ch in desc.channels:
-                got = ha.entity_config(self.topics, self.service_id, key, desc, ident[1], ch)
-                if got is not None:
+                kinds = ha.entity_kinds(ch) + [k for k in [ha.legacy_kind(ch)] if k is not None]
+                for kind in sorted(set(kinds)):
                     # today's config topic, and the one of earlier versions
-                    out += sorted({ha.config_topic(self.topics, got[0], key, ch.name),
-                                   f"{self.topics.discovery_prefix}/{got[0]}/{safe_id(key)}/{safe_id(ch.name)}/config"})
+                    out += sorted({ha.config_topic(self.topics, kind, key, ch.name),
+                                   f"{self.topics.discovery_prefix}/{kind}/{safe_id(key)}/{safe_id(ch.name)}/config"})
         return out

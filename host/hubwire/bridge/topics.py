@@ -9,6 +9,7 @@ import json
 import math
 import re
 import socket
+import struct
 from dataclasses import dataclass, field
 from typing import Any, Dict, Optional, Tuple
 
@@ -22,6 +23,9 @@ ONLINE = "online"
 OFFLINE = "offline"
 #: command verbs: ``<prefix>/<board>/<op>/<channel>``
 OPS = ("set", "call", "read", "subscribe", "unsubscribe")
+
+_F32 = struct.Struct("<f")
+
 
 @dataclass
 class BridgeConfig:
@@ -89,6 +93,10 @@ class Topics:
     def stream(self, key: str, channel: str) -> str:
         return self.board(key, "stream", level(channel))
 
+    def result(self, key: str, channel: str) -> str:
+        """The last call of an action: ``{"arg": ..., "value": ...}`` (retained)."""
+        return self.board(key, "result", level(channel))
+
     def event(self, key: str, channel: str) -> str:
         return self.board(key, "event", level(channel))
 
@@ -137,10 +145,34 @@ class Topics:
 
 def to_json(ch: Optional[Channel], value: Any, returns: bool = False) -> Any:
     """JSON form of a value of ``ch`` (its return value when ``returns``): structs become objects,
-    arrays lists; NaN and infinities become None (JSON has no such numbers)."""
+    arrays lists; NaN and infinities become None (JSON has no such numbers); an f32 is its
+    shortest decimal (0.1, not the double 0.10000000149011612 it reads back as)."""
     codec = (ch.returns if returns else ch.codec) if ch is not None else None
     v = codec.to_json(value) if codec is not None else value
-    return _finite(v)
+    return _finite(_short_f32(codec, v) if codec is not None else v)
+
+
+def _f32(x: Any) -> Any:
+    if not isinstance(x, float) or not math.isfinite(x):
+        return x
+    packed = _F32.pack(x)
+    for digits in range(6, 10):  # 9 significant digits always give the same f32 back
+        short = float(f"{x:.{digits}g}")
+        if _F32.pack(short) == packed:
+            return short
+    return x
+
+
+def _short_f32(codec: Any, v: Any) -> Any:
+    kind = getattr(codec, "kind", "")
+    if kind == "scalar" or kind in ("array", "list"):
+        if getattr(codec, "scalar", None) != "f32":
+            return v
+        return [_f32(x) for x in v] if isinstance(v, list) else _f32(v)
+    if kind == "struct" and isinstance(v, dict):
+        subs = dict(zip(codec.fields, codec.field_codecs))
+        return {k: _short_f32(subs.get(k), x) for k, x in v.items()}
+    return v
 
 
 def _finite(v: Any) -> Any:

@@ -14,9 +14,10 @@ from typing import Any, Deque, Dict, List, Mapping, Optional, Tuple
 
 from .. import aio
 from ..descriptor import Channel, Descriptor
-from ..errors import HubwireError, InvalidValue, NakError
+from ..errors import HubwireError, NakError
 from .fleet import FleetLike
-from .model import ChannelRecord, EventRecord
+from .model import ChannelRecord, EventRecord, LinkRecord
+from .words import outcome, outcome_text
 
 __all__ = ["BoardFeed", "Feeds", "outcome_text"]
 
@@ -28,15 +29,6 @@ EVENT_LOG = 500
 POLL_HZ = 2.0
 #: most reads a second of one channel (each is a round trip; streams are for fast values)
 READ_MAX_HZ = 10.0
-
-
-def outcome_text(exc: BaseException) -> str:
-    """Why a write or call failed, as the page shows it: the NAK's name first when there is one."""
-    if isinstance(exc, NakError):
-        return f"NAK {exc.error}: {exc}"
-    if isinstance(exc, InvalidValue):  # refused by the hub's own checks, with the NAK a device would send
-        return f"refused ({exc.error}): {exc}"
-    return f"{type(exc).__name__}: {exc}"
 
 
 class BoardFeed:
@@ -64,6 +56,8 @@ class BoardFeed:
         self._tasks: List["asyncio.Task[None]"] = []
         #: the service's hub providers (``fleet.hub``, daemon/hub_providers.py), None without a service
         self.providers: Any = None
+        #: True once stopped: its records are the last values the board sent
+        self.ended = False
 
     def hub_providers(self) -> Dict[str, str]:
         """Who provides each hub channel the board uses, through the service ("" when nobody)."""
@@ -78,6 +72,7 @@ class BoardFeed:
         self._tasks = [asyncio.ensure_future(self._poll()), asyncio.ensure_future(self._events())]
 
     async def stop(self) -> None:
+        self.ended = True
         tasks = list(self._streams.values()) + self._tasks
         for t in tasks:
             t.cancel()
@@ -90,7 +85,7 @@ class BoardFeed:
         rec = self.records[name]
         rec.rate = float(hz) if not rec.read else min(float(hz), READ_MAX_HZ)
         if rec.read and rec.read != "read":
-            rec.read = f"read {rec.rate:g} times a second (stream refused)"
+            rec.read = f"read {rec.rate:g} times a second (the board has no stream free for it)"
         if name in self._streams:
             self._streams[name].cancel()
             self._streams[name] = asyncio.ensure_future(self._stream(rec))
@@ -110,7 +105,8 @@ class BoardFeed:
                     rec.error = outcome_text(e)
                     return
                 rec.rate = min(rec.rate, READ_MAX_HZ)
-                rec.read = f"read {rec.rate:g} times a second (stream refused: {e.error})"
+                why = "the board has no stream free for it" if e.error == "BUSY" else outcome_text(e)
+                rec.read = f"read {rec.rate:g} times a second ({why})"
                 self._streams.pop(ch.name, None)
                 return
             except HubwireError as e:  # not subscribed yet (link down while opening): try again
@@ -147,25 +143,35 @@ class BoardFeed:
 
     async def write(self, ch: Channel, value: Any) -> Tuple[bool, str]:
         """Write through the device API (its type and range checks), ``(acked, what happened)``."""
+        ok, text, _ = await self.write_coded(ch, value)
+        return ok, text
+
+    async def write_coded(self, ch: Channel, value: Any) -> Tuple[bool, str, Optional[str]]:
+        """:meth:`write`, with the protocol's name of the reason when refused."""
         try:
             await self.dev.write(ch.name, value)
         except (HubwireError, ValueError, TypeError) as e:
-            return False, outcome_text(e)
+            return (False, *outcome(e))
         rec = self.records.get(ch.name)
         if rec is not None and rec.read:
             rec.add(ch.codec.to_json(ch.check(value)), self.epoch + time.monotonic())  # the device holds it now
-        return True, "acked"
+        return True, "acked", None
 
     async def call(self, ch: Channel, arg: Any) -> Tuple[bool, str]:
         """Call an action, ``(ok, its result or why it failed)``."""
+        ok, text, _ = await self.call_coded(ch, arg)
+        return ok, text
+
+    async def call_coded(self, ch: Channel, arg: Any) -> Tuple[bool, str, Optional[str]]:
+        """:meth:`call`, with the protocol's name of the reason when refused."""
         try:
             result = await self.dev.call(ch.name, arg)
         except (HubwireError, ValueError, TypeError) as e:
-            return False, outcome_text(e)
+            return (False, *outcome(e))
         from .model import fmt_value
 
         returns = ch.returns
-        return True, fmt_value(returns.to_json(result) if returns is not None and result is not None else result)
+        return True, fmt_value(returns.to_json(result) if returns is not None and result is not None else result), None
 
 
 class Feeds:
@@ -176,6 +182,8 @@ class Feeds:
         self.stream_hz = stream_hz
         self.rates = dict(rates or {})
         self.feeds: Dict[str, BoardFeed] = {}
+        #: each board's losses and returns as seen here, by key (kept across its feeds)
+        self.links: Dict[str, LinkRecord] = {}
         self._generation = 0
         self._task: Optional["asyncio.Task[None]"] = None
         self._watch: Optional["asyncio.Task[None]"] = None
@@ -200,12 +208,15 @@ class Feeds:
         return sorted(self.fleet.boards(), key=lambda b: b.key)
 
     def update(self, board: Any) -> None:
-        """A feed for ``board`` if it has a discovered device it has none for yet; none while it has
-        no device."""
+        """A feed for ``board`` if it has a discovered device it has none for yet. While it has no
+        device its feed is stopped and kept: the page shows its last values as such."""
         dev: Optional[aio.AsyncDevice] = board.device
+        self.links.setdefault(board.key, LinkRecord()).observe(board.state)
         old = self.feeds.get(board.key)
-        if dev is None and old is not None:  # unplugged: its session is gone, so are its values
-            asyncio.ensure_future(self.feeds.pop(board.key).stop())
+        if dev is None and old is not None:  # unplugged: its session is gone, its last values stay
+            if not old.ended:
+                old.ended = True
+                asyncio.ensure_future(old.stop())
             return
         if dev is None or dev.core.descriptor is None:
             return

@@ -16,8 +16,8 @@ from typing import Any, Deque, List, Optional, Sequence, Tuple
 
 from ..descriptor import Channel
 
-__all__ = ["HISTORY_S", "RATE_WINDOW_S", "RATES", "ChannelRecord", "EventRecord", "widget_for",
-           "flatten", "fmt_value", "decimate", "to_csv"]
+__all__ = ["HISTORY_S", "RATE_WINDOW_S", "RATES", "ChannelRecord", "EventRecord", "LinkRecord", "widget_for",
+           "flatten", "fmt_value", "decimate", "to_csv", "merge_csv", "default_picks", "key_channels"]
 
 #: seconds of history kept per plotted channel
 HISTORY_S = 300.0
@@ -178,3 +178,76 @@ def to_csv(columns: Sequence[str], times: Sequence[float], rows: Sequence[Tuple[
     for t, row in zip(times, rows):
         w.writerow([f"{t:.6f}"] + [repr(v) if isinstance(v, float) and not v.is_integer() else f"{v:g}" for v in row])
     return out.getvalue()
+
+
+def merge_csv(parts: Sequence[Tuple[Sequence[str], Sequence[float], Sequence[Tuple[float, ...]]]]) -> str:
+    """One CSV of several plotted channels (``(columns, times, rows)`` each) on their shared time axis:
+    ``time`` then every column; a row per sample, in time order, empty where that channel had none."""
+    columns = [c for cols, _, _ in parts for c in cols]
+    merged: List[Tuple[float, int, Tuple[float, ...]]] = []
+    offset = 0
+    for cols, times, rows in parts:
+        merged += [(t, offset, row) for t, row in zip(times, rows)]
+        offset += len(cols)
+    merged.sort(key=lambda x: (x[0], x[1]))
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(["time"] + columns)
+    for t, at, row in merged:
+        cells = [""] * len(columns)
+        for i, v in enumerate(row):
+            cells[at + i] = repr(v) if not v.is_integer() else f"{v:g}"
+        w.writerow([f"{t:.6f}"] + cells)
+    return out.getvalue()
+
+
+def default_picks(channels: Sequence[Channel], most: int = 2) -> List[str]:
+    """Channels plotted when the page opens: the first streamable numbers that are not booleans
+    (a user picks others on the page)."""
+    fit = [c.name for c in channels if c.streamable and plottable(c) and c.codec.scalar != "bool"]
+    return fit[:most]
+
+
+def key_channels(channels: Sequence[Channel], most: int = 3) -> List[str]:
+    """The values a board's overview tile shows: streamed single numbers first (a battery, a speed),
+    then other readable single numbers."""
+    scalars = [c for c in channels if plottable(c) and c.codec.kind == "scalar"]
+    ordered = [c for c in scalars if c.streamable and c.unit] + [c for c in scalars if c.streamable and not c.unit] \
+        + [c for c in scalars if not c.streamable]
+    return [c.name for c in ordered][:most]
+
+
+@dataclass
+class LinkRecord:
+    """A board's link as the page has seen it: how often it was lost and how long it took to come back
+    (counted from its state changes, so that every loss shown has its return shown too)."""
+
+    lost: int = 0
+    #: wall-clock time the current loss began; None while the board is ready
+    lost_at: Optional[float] = None
+    #: seconds the last loss lasted (None: not back from one yet)
+    back_after: Optional[float] = None
+    _ready: bool = False  # ready once at least
+
+    def observe(self, state: str, now: Optional[float] = None) -> None:
+        """Note the board's state. A loss is ``lost`` or ``unplugged`` after it was ready; it is back
+        once ready again (``connecting`` on the way, or after a reboot it noticed, is no loss)."""
+        now = time.time() if now is None else now
+        if state in ("lost", "unplugged"):
+            if self._ready and self.lost_at is None:
+                self.lost += 1
+                self.lost_at = now
+        elif state == "ready":
+            self._ready = True
+            if self.lost_at is not None:
+                self.back_after = now - self.lost_at
+                self.lost_at = None
+
+    def text(self) -> str:
+        """``never``, ``1 time, lost now``, ``2 times, back after 1.5 s``."""
+        if not self.lost:
+            return "never"
+        times = f"{self.lost} time{'s' if self.lost != 1 else ''}"
+        if self.lost_at is not None:
+            return times + ", lost now"
+        return times + (f", back after {self.back_after:.1f} s" if self.back_after is not None else "")

@@ -12,7 +12,9 @@ import socket
 from typing import Any, Callable, Dict, Iterable, Iterator, Mapping, Optional, Set
 
 from .auth import TOKEN_COOKIE, Gate, TokenGate, load_token, served_names
+from .attrs import tag
 from .feed import Feeds
+from .model import LinkRecord
 from .fleet import FleetLike
 
 __all__ = ["run_dashboard", "DEFAULT_PORT", "is_loopback", "load_token", "TOKEN_COOKIE", "Gate", "TokenGate"]
@@ -38,8 +40,9 @@ def is_loopback(host: str) -> bool:
             return False
 
 
-# Channels off screen are not redrawn: the page tells which channel cards are on screen (or nearly).
-_VISIBILITY_JS = """<script>
+# Channels off screen are not redrawn: the page tells which channel rows are on screen (or nearly).
+# A click on a board's tile brings its card into view.
+_PAGE_JS = """<script>
 document.addEventListener('DOMContentLoaded', () => {
   const send = d => {  // once the page is connected to the server
     if (window.did_handshake && getElement(0)) emitEvent('hw_visible', d); else setTimeout(() => send(d), 50);
@@ -52,59 +55,104 @@ document.addEventListener('DOMContentLoaded', () => {
     if (!watched.has(el)) { watched.add(el); seen.observe(el); } });
   new MutationObserver(scan).observe(document.body, {childList: true, subtree: true});
   scan();
+  document.addEventListener('click', ev => {
+    const tile = ev.target.closest && ev.target.closest('[data-hw-tile]');
+    const card = tile && document.querySelector('[data-hw-board="' + CSS.escape(tile.dataset.hwTile) + '"]');
+    if (card) card.scrollIntoView({behavior: 'smooth', block: 'start'});
+  });
 });
 </script>"""
+
+# Wide screens: boards on the left, the plot and the event log on the right, kept in view while the
+# boards scroll; narrow ones: one column.
+_PAGE_CSS = """
+.hw-main { display: grid; grid-template-columns: minmax(0, 1fr); gap: 12px; width: 100%; }
+@media (min-width: 1024px) {
+  .hw-main { grid-template-columns: minmax(400px, 480px) minmax(0, 1fr); }
+  .hw-side { position: sticky; top: 8px; align-self: start; }
+}
+@media (min-width: 1800px) { .hw-main { grid-template-columns: minmax(480px, 600px) minmax(0, 1fr); } }
+.nicegui-content { padding: 8px; }
+"""
 
 
 def _page(feeds: Feeds) -> None:
     from nicegui import ui
 
     from .view_board import BoardView
+    from .view_overview import EventLog, Tile
+    from .view_plot import PlotPanel
+
+    def lookup(key: str) -> Any:
+        board, _, name = key.partition(".")
+        feed = feeds.feeds.get(board)
+        return feed.records.get(name) if feed is not None else None
+
+    def set_rate(key: str, hz: float) -> None:
+        board, _, name = key.partition(".")
+        feed = feeds.feeds.get(board)
+        if feed is not None and name in feed.records:
+            feed.set_rate(name, hz)
 
     @ui.page("/", title="Hubwire dashboard")
     def index() -> None:
         ui.query("body").classes("bg-gray-100")
-        ui.add_head_html(_VISIBILITY_JS)
+        ui.add_head_html(_PAGE_JS)
+        ui.add_css(_PAGE_CSS)
         visible: Set[str] = set()
 
         def on_visible(e: Any) -> None:
             (visible.add if e.args.get("on") else visible.discard)(str(e.args.get("key")))
 
         ui.on("hw_visible", on_visible)
-        with ui.header(fixed=False).classes("items-center"):
-            ui.label("Hubwire").classes("text-2xl font-bold")
-            count = ui.label("").props("data-hw-boards")
-        column = ui.column().classes("w-full max-w-screen-2xl mx-auto")
-        with column:
-            empty = ui.label("no boards yet").classes("text-gray-600")
+        with ui.row().classes("w-full items-center gap-x-3 gap-y-0"):
+            ui.label("Hubwire").classes("text-xl font-bold")
+            count = ui.label("").classes("text-sm text-gray-600").props("data-hw-boards")
+        tiles_row = tag(ui.row().classes("w-full gap-2"), overview="all")
+        with ui.element("div").classes("hw-main"):
+            column = ui.column().classes("w-full gap-3 min-w-0")
+            with column:
+                empty = ui.label("no boards yet").classes("text-gray-600")
+            with ui.column().classes("hw-side w-full gap-3 min-w-0"):
+                plot = PlotPanel(lookup, set_rate)
+                log_view = EventLog()
         views: Dict[str, BoardView] = {}
+        tiles: Dict[str, Tile] = {}
 
         def sync() -> None:
             boards = feeds.boards()
             keys = [b.key for b in boards]
             for key in [k for k in views if k not in keys]:
                 column.remove(views.pop(key).card)
+                tiles_row.remove(tiles.pop(key).card)
+            built = False
             for b in boards:
                 feed = feeds.feeds.get(b.key)
                 v = views.get(b.key)
                 if v is None or v.generation != (feed.generation if feed is not None else 0):
+                    if built:  # one card per refresh: the boards' sessions share this loop
+                        continue
+                    built = True
                     if v is not None:
                         column.remove(v.card)
+                        tiles_row.remove(tiles[b.key].card)
+                    link = feeds.links.setdefault(b.key, LinkRecord())
                     with column:
-                        views[b.key] = BoardView(b, feed, feeds.fleet)
+                        views[b.key] = BoardView(b, feed, link, plot, feeds.fleet)
+                    with tiles_row:
+                        tiles[b.key] = Tile(b, feed)
                     views[b.key].card.move(column, target_index=keys.index(b.key) + 1)
-                views[b.key].refresh(b, visible)
+                    tiles[b.key].card.move(tiles_row, target_index=keys.index(b.key))
+                if b.key in views:
+                    views[b.key].refresh(b, visible)
+                    tiles[b.key].refresh(b)
+            log_view.refresh([f for f in (feeds.feeds.get(k) for k in keys) if f is not None])
             empty.set_visibility(not boards)
-            count.set_text(f"{len(boards)} board{'s' if len(boards) != 1 else ''}: "
-                           + ", ".join(f"{b.key} {b.state}" for b in boards))
-
-        def plots() -> None:
-            for v in views.values():
-                v.refresh_plots(visible)
+            count.set_text(f"{len(boards)} board{'s' if len(boards) != 1 else ''}")
 
         sync()
         ui.timer(VALUE_REFRESH, sync)
-        ui.timer(PLOT_REFRESH, plots)
+        ui.timer(PLOT_REFRESH, plot.refresh)
 
 
 class _Server:

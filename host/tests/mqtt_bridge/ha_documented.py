@@ -32,6 +32,11 @@ KEYS: Dict[str, FrozenSet[str]] = {
                          "payload_not_available", "payload_press", "retain"},
     "event": _COMMON | {"device_class", "event_types", "payload_available", "payload_not_available",
                         "state_topic", "value_template"},
+    "binary_sensor": _COMMON | {"device_class", "expire_after", "force_update", "off_delay",
+                                "payload_available", "payload_not_available", "payload_off",
+                                "payload_on", "state_topic", "value_template"},
+    "text": _COMMON | {"command_template", "command_topic", "max", "min", "mode", "pattern",
+                       "retain", "state_topic", "value_template"},
 }
 
 #: required keys (``platform`` only in device-based discovery, which the bridge does not use)
@@ -41,6 +46,8 @@ REQUIRED: Dict[str, FrozenSet[str]] = {
     "switch": frozenset({"command_topic"}),
     "button": frozenset({"command_topic"}),
     "event": frozenset({"state_topic", "event_types"}),
+    "binary_sensor": frozenset({"state_topic"}),
+    "text": frozenset({"command_topic"}),
 }
 
 DEVICE_KEYS = frozenset({"configuration_url", "connections", "hw_version", "identifiers", "manufacturer",

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 
 import pytest
 
@@ -52,3 +53,28 @@ def test_outbox_keeps_last_values_and_events_in_order() -> None:
             box.put_event("e", str(i))
         assert [p for _, p in box.events] == ["2", "3", "4"] and box.events_dropped == 2
     asyncio.run(main())
+
+
+def test_f32_values_are_published_in_their_shortest_form() -> None:
+    """An f32 read back as a Python float prints all the digits of the double (0.10000000149011612);
+    the state (what Home Assistant shows) carries the shortest decimal that is the same f32."""
+    import struct as st
+
+    from hubwire.descriptor import parse_descriptor
+    from hubwire.bridge.topics import dumps, to_json
+    desc = parse_descriptor(json.dumps({"p": 1, "n": "x", "ch": [
+        {"id": 1, "n": "imu", "a": "r", "t": "struct", "f": [{"n": "ax", "t": "f32"}, {"n": "g", "t": "f32", "c": 2},
+                                                             {"n": "n", "t": "i16"}]},
+        {"id": 2, "n": "v", "a": "r", "t": "f32"}, {"id": 3, "n": "d", "a": "r", "t": "f64"},
+        {"id": 4, "n": "l", "a": "r", "t": "f32", "vc": 4}]}).encode())
+
+    def f32(x: float) -> float:
+        return float(st.unpack("<f", st.pack("<f", x))[0])
+    imu, v, d, lst = (desc.by_name(n) for n in ("imu", "v", "d", "l"))
+    value = imu.codec.decode(imu.codec.encode({"ax": 0.1, "g": [9.81, -1e-7], "n": 3}))
+    assert dumps(to_json(imu, value)) == '{"ax":0.1,"g":[9.81,-1e-07],"n":3}'
+    assert dumps(to_json(v, f32(0.1))) == "0.1" and to_json(v, f32(1 / 3)) == 0.33333334
+    assert to_json(d, 0.10000000149011612) == 0.10000000149011612  # an f64 keeps every digit
+    assert to_json(lst, [f32(2.2), f32(float("nan"))]) == [2.2, None]
+    for x in (f32(0.1), f32(123456.789), f32(3.4e38), f32(1.17e-38), 0.0, -0.0):
+        assert f32(to_json(v, x)) == x  # the same f32

@@ -310,9 +310,9 @@ def test_hub_channels_a_program_provides_bind_and_answer(board: Open) -> None:
     and every bump came back right."""
     tallies: List[int] = []
     hub = hubwire.HubChannels("behaviour")
-    hub.accept("tally", tallies.append)  # an int takes the sketch's u32
-    hub.action("bump", lambda n: n + 1)
-    hub.event("tick")
+    hub.accept("tally", tallies.append, type="u32")
+    hub.action("bump", lambda n: n + 1, type="u32", returns="u32")
+    hub.event("tick", type="u32")
     dev = board("soak", hub=hub)
     deadline = time.monotonic() + 60
     while dev.hub_binding() != {"tally": "ok", "bump": "ok", "tick": "ok"}:

@@ -74,7 +74,7 @@ def test_start_progress_cancel_and_result_in_the_browser(boards_dir: str, tmp_pa
             page.wait_for_function(f"Number(document.querySelector('{sel('progress', M)}')"
                                    ".getAttribute('data-hw-fraction')) > 0")
             page.locator(sel("start", M)).click()
-            wait_text(page, sel("mission-error", M), r"^NAK BUSY")
+            wait_text(page, sel("mission-error", M), r"^refused by the board: the board is busy")
             wait_text(page, sel("run", M), r"^run 2 .*: running$")  # the run that goes is still shown
             page.locator(sel("cancel", M)).click()
             wait_text(page, sel("run", M), r"^run 2 .*: cancelled$")

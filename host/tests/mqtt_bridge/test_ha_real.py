@@ -1,0 +1,300 @@
+"""A real Home Assistant core (from PyPI, tools/ha/setup-ha.sh, cached) with its MQTT integration
+added through the config flow on a private mosquitto, and `hubwire serve --mqtt` owning five
+emulated boards (the Rover, examples/Actions, examples/LargeValues, extras/tests/Large1K,
+examples/Missions). Everything is asserted through Home Assistant's REST and websocket APIs: the
+entities it registered, commands from it reaching the boards, events once, a refused write,
+availability on unplug and on a clean stop, and its log naming no Hubwire entity or topic.
+
+Set HUBWIRE_UPDATE_SCREENSHOT=1 to write docs/img/ha-entities.png (the Rover's device page with its
+entities, in chromium; HUBWIRE_SCREENSHOT_TO=FILE writes it elsewhere).
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import select
+import subprocess
+import sys
+import time
+from typing import Any, Dict, Iterator, List, Optional, Tuple
+
+import pytest
+
+from conftest import Emulator
+from hubwire.testing import emulator_binary, repo_root
+from service.conftest import HOST, Serve
+
+from .conftest import MOSQUITTO, Broker
+from .real_ha import STATE_S, HomeAssistant, setup_ha, wait
+
+pytestmark = pytest.mark.home_assistant
+
+EMULATORS = {"rover": "hubwire-emulator", "actions": "hubwire-actions-emulator",
+             "large": "hubwire-largevalues-emulator", "large1k": "hubwire-large-emulator",
+             "missions": "hubwire-missions-emulator"}
+
+#: entity -> (device_class, unit, entity_category, state_class) as Home Assistant must show them
+#: (docs/MQTT.md, "Entity mapping"); None: not set
+EXPECTED: Dict[str, Tuple[Optional[str], Optional[str], Optional[str], Optional[str]]] = {
+    "number.rover_left": ("speed", "m/s", None, None),
+    "number.rover_right": ("speed", "m/s", None, None),
+    "sensor.rover_imu": (None, None, None, None),
+    "sensor.rover_range": (None, None, None, None),
+    "sensor.rover_battery": ("voltage", "mV", None, "measurement"),
+    "switch.rover_led": (None, None, None, None),
+    "text.rover_name": (None, None, None, None),
+    "event.rover_bumper": (None, None, None, None),
+    "number.rover_beep": (None, None, None, None),
+    "binary_sensor.rover_beep_result": (None, None, None, None),
+    "number.rover_selftest": (None, None, None, None),
+    "sensor.rover_selftest_result": (None, None, None, "measurement"),
+    "sensor.rover_failsafes": (None, None, "diagnostic", "total_increasing"),
+    "sensor.rover_applied": (None, None, "diagnostic", "total_increasing"),
+    "number.actions_blink": (None, None, None, None),
+    "number.actions_read_pin": (None, None, None, None),
+    "sensor.actions_read_pin_result": (None, None, None, "measurement"),
+    "button.actions_uptime": (None, None, None, None),
+    "sensor.actions_uptime_result": ("duration", "ms", None, "measurement"),
+    "sensor.actions_calls": (None, None, "diagnostic", "total_increasing"),
+    "sensor.large_profile": (None, None, None, None),
+    "sensor.large_path": (None, None, None, None),
+    "text.large_sum": (None, None, None, None),
+    "sensor.large_sum_result": (None, None, None, "measurement"),
+    "sensor.large_profile_writes": (None, None, "diagnostic", "total_increasing"),
+    "sensor.large_path_writes": (None, None, "diagnostic", "total_increasing"),
+    "sensor.large1k_big": (None, None, None, None),
+    "sensor.large1k_tail": (None, None, None, None),
+    "text.large1k_total": (None, None, None, None),
+    "sensor.large1k_total_result": (None, None, None, "measurement"),
+    "sensor.large1k_big_writes": (None, None, "diagnostic", "total_increasing"),
+    "sensor.large1k_tail_writes": (None, None, "diagnostic", "total_increasing"),
+    "sensor.large1k_checksum": (None, None, "diagnostic", "total_increasing"),
+    "number.missions_speed": ("speed", "m/s", None, None),
+    "sensor.missions_odometer": ("distance", "m", None, "measurement"),
+    "switch.missions_blocked": (None, None, None, None),
+}
+
+
+class Rig:
+    def __init__(self, ha: HomeAssistant, broker: Broker, serve: Serve, emus: Dict[str, Emulator]) -> None:
+        self.ha, self.broker, self.serve, self.emus = ha, broker, serve, emus
+
+    def mqtt_one(self, topic: str, action: Any) -> str:
+        """The next message on ``topic`` after ``action()`` (mosquitto's own client, which is
+        known to be subscribed once a probe of ours reached it)."""
+        probe = f"test/probe/{os.getpid()}"
+        sub = subprocess.Popen(["mosquitto_sub", "-h", "127.0.0.1", "-p", str(self.broker.port), "-v",
+                                "-t", topic, "-t", probe], stdout=subprocess.PIPE, bufsize=0)
+        assert sub.stdout is not None
+        fd, buf = sub.stdout.fileno(), b""
+
+        def until(pred: Any, what: str) -> str:
+            nonlocal buf
+            deadline = time.monotonic() + STATE_S
+            while True:
+                lines = buf.decode(errors="replace").splitlines()
+                hit = next((ln for ln in lines if pred(ln)), None)
+                if hit is not None:
+                    return hit
+                assert time.monotonic() < deadline, f"timed out waiting for {what}"
+                if select.select([fd], [], [], 0.5)[0]:
+                    buf += os.read(fd, 65536)
+                elif what == "the probe":
+                    self.publish(probe, "x")
+        try:
+            until(lambda ln: ln.startswith(probe + " "), "the probe")
+            buf = b""
+            action()
+            return until(lambda ln: ln.startswith(topic + " "), topic)[len(topic) + 1:].strip()
+        finally:
+            sub.kill()
+            sub.wait()
+
+    def publish(self, topic: str, payload: str) -> None:
+        subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(self.broker.port), "-q", "1",
+                        "-t", topic, "-m", payload], check=True, timeout=30)
+
+
+@pytest.fixture(scope="module")
+def rig(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Rig]:
+    if MOSQUITTO is None:
+        pytest.fail("mosquitto is not installed: run tools/setup.sh", pytrace=False)
+    tmp = tmp_path_factory.mktemp("ha")
+    venv = setup_ha()
+    (tmp / "broker").mkdir()
+    broker = Broker(MOSQUITTO, str(tmp / "broker"), False)
+    broker.start()
+    ha = HomeAssistant(venv, str(tmp / "config"))
+    emus: Dict[str, Emulator] = {}
+    serve: Optional[Serve] = None
+    try:
+        ha.start()
+        ha.onboard()
+        ha.add_mqtt(broker.port)
+        boards = tmp / "boards"
+        boards.mkdir()
+        bin_dir = os.path.dirname(emulator_binary())
+        for name, binary in EMULATORS.items():
+            emus[name] = Emulator(os.path.join(bin_dir, binary), str(boards / name))
+            emus[name].start()
+        sock = str(tmp / "run" / "hubwire.sock")
+        (tmp / "cache").mkdir()
+        env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(tmp / "cache"),
+                   PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        serve = Serve(str(boards), sock, env, str(tmp / "serve.log"),
+                      ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", "test"])
+        serve.start()
+        yield Rig(ha, broker, serve, emus)
+    finally:
+        if serve is not None:
+            serve.stop()
+        for e in emus.values():
+            if e.proc is not None:
+                e.stop()
+        ha.stop()
+        broker.stop()
+
+
+def test_every_entity_is_registered_with_its_platform_class_unit_and_category(rig: Rig) -> None:
+    ha = rig.ha
+    wait(lambda: set(EXPECTED) <= set(ha.states()), STATE_S, "every entity registered")
+    reg = {k: v for k, v in ha.registry().items() if v["platform"] == "mqtt"}
+    assert set(reg) == set(EXPECTED), (set(reg) ^ set(EXPECTED))
+    states = ha.states()
+    for eid, (cls, unit, category, state_class) in EXPECTED.items():
+        attrs = states[eid]["attributes"]
+        got = (attrs.get("device_class"), attrs.get("unit_of_measurement"), reg[eid]["entity_category"],
+               attrs.get("state_class"))
+        assert got == (cls, unit, category, state_class), eid
+    # one device per board
+    devices = {reg[e]["device_id"] for e in reg}
+    assert len(devices) == len(EMULATORS)
+    # states the boards start with, as HA shows them (a value read from the board: no entity
+    # waits for a first command to have one)
+    ha.wait_state("sensor.rover_battery", lambda s: s["state"].isdigit() and 6000 < int(s["state"]) <= 7400,
+                  "a battery voltage in mV (the emulated one drains from 7400)")
+    want = {"sensor.rover_range": "[150,150,150,150]", "text.rover_name": "rover",
+            "switch.rover_led": "off", "number.rover_left": "0.0", "sensor.rover_failsafes": "0",
+            "number.missions_speed": "1.0", "switch.missions_blocked": "off"}
+    for eid, value in want.items():
+        ha.wait_state(eid, lambda s, v=value: s["state"] == v, f"state {value}")
+    # a struct over 255 characters: a cut state, the whole value as attributes
+    profile = ha.wait_state("sensor.large_profile", lambda s: s["state"] not in ("unknown", "unavailable"), "a value")
+    assert len(profile["state"]) <= 255 and len(profile["attributes"]["gain"]) == 20
+    imu = ha.wait_state("sensor.rover_imu", lambda s: "az" in s["attributes"], "fields as attributes")
+    assert abs(imu["attributes"]["az"] - 9.81) < 1e-3
+    rng = ha.state("sensor.rover_range")
+    assert rng is not None and rng["attributes"]["values"] == [150, 150, 150, 150]
+
+
+def test_commands_from_home_assistant_reach_the_board(rig: Rig) -> None:
+    ha = rig.ha
+    # each state below comes from the board (read back, or the call's result), never from HA itself
+    ha.call("number", "set_value", entity_id="number.rover_left", value=0.5)
+    ha.wait_state("number.rover_left", lambda s: s["state"] == "0.5", "0.5 read back")
+    ha.call("switch", "turn_on", entity_id="switch.rover_led")
+    ha.wait_state("switch.rover_led", lambda s: s["state"] == "on", "on")
+    ha.call("text", "set_value", entity_id="text.rover_name", value="kitchen")
+    ha.wait_state("text.rover_name", lambda s: s["state"] == "kitchen", "the new name")
+    ha.call("button", "press", entity_id="button.actions_uptime")
+    ha.wait_state("sensor.actions_uptime_result", lambda s: s["state"].isdigit(), "the uptime")
+    ha.call("number", "set_value", entity_id="number.actions_read_pin", value=200)
+    ha.wait_state("sensor.actions_read_pin_result", lambda s: s["state"] == "-1", "no such pin: -1")
+    ha.call("number", "set_value", entity_id="number.rover_beep", value=50)
+    ha.wait_state("binary_sensor.rover_beep_result", lambda s: s["state"] == "on", "beep accepted")
+    ha.call("text", "set_value", entity_id="text.large_sum", value="[1, 2, 3]")
+    ha.wait_state("sensor.large_sum_result", lambda s: s["state"] == "6", "1+2+3")
+    # a call from another MQTT client, its argument longer than a state may be: the text is cut
+    rig.publish("hubwire/large1k/call/total", json.dumps(list(range(1000, 1064))))
+    ha.wait_state("sensor.large1k_total_result", lambda s: s["state"] == "66016", "the sum")
+    total = ha.wait_state("text.large1k_total", lambda s: s["state"].startswith("[1000,"), "the argument")
+    assert len(total["state"]) == 255 and total["state"].endswith("...")
+    ha.call("number", "set_value", entity_id="number.missions_speed", value=1.5)
+    ha.wait_state("number.missions_speed", lambda s: s["state"] == "1.5", "1.5 read back")
+
+
+def test_events_fire_once_each(rig: Rig) -> None:
+    ha = rig.ha
+    changes = ha.state_changes("event.rover_bumper", lambda: ha.call(
+        "number", "set_value", entity_id="number.rover_selftest", value=3), lambda got: len(got) >= 3)
+    ha.wait_state("sensor.rover_selftest_result", lambda s: s["state"] == "3", "3 events sent")
+    # one more event after them: had any of the three come twice, it would show before this one
+    more = ha.state_changes("event.rover_bumper", lambda: ha.call(
+        "number", "set_value", entity_id="number.rover_selftest", value=1), lambda got: len(got) >= 1)
+    ids = [c["attributes"]["id"] for c in changes + more]
+    assert len(ids) == 4 and len(set(ids)) == 4, ids
+    assert [int(i.rsplit(":", 1)[1]) for i in ids] == sorted(int(i.rsplit(":", 1)[1]) for i in ids)
+    assert all(c["attributes"]["event_type"] == "bumper" for c in changes + more)
+
+
+def test_a_refused_write_leaves_the_value_the_board_has(rig: Rig) -> None:
+    ha = rig.ha
+    ha.call("number", "set_value", entity_id="number.actions_blink", value=3)
+    ha.wait_state("number.actions_blink", lambda s: s["state"] == "3", "3 accepted")
+    err = rig.mqtt_one("hubwire/actions/error", lambda: ha.call("number", "set_value",
+                                                                entity_id="number.actions_blink", value=11))
+    assert '"error":"Nak"' in err.replace(" ", ""), err
+    assert ha.state("number.actions_blink")["state"] == "3"  # type: ignore[index]
+
+
+def test_a_nan_reading_shows_unknown_not_the_last_number(rig: Rig) -> None:
+    ha = rig.ha
+    # what the bridge publishes for a NaN (JSON has none): null
+    rig.publish("hubwire/missions/state/odometer", "null")
+    ha.wait_state("sensor.missions_odometer", lambda s: s["state"] == "unknown", "unknown")
+    rig.publish("hubwire/missions/state/odometer", "2.5")
+    ha.wait_state("sensor.missions_odometer", lambda s: s["state"] == "2.5", "a number again")
+
+
+def test_the_rover_on_its_device_page(rig: Rig) -> None:
+    if sys.version_info < (3, 10) or not os.path.exists("/usr/bin/chromium"):
+        pytest.skip("chromium and Playwright (Python 3.10+) take the screenshot")
+    version = rig.ha.request("GET", "/api/config")["version"]
+    if not version.startswith("2025."):
+        # 2024.3 (the fallback for Python 3.11) passes every other test; its device page did not
+        # show the entity rows to this locator
+        pytest.skip(f"the picture is taken with Home Assistant 2025.x (this is {version})")
+    from .ha_screenshot import device_page
+    out = os.environ.get("HUBWIRE_SCREENSHOT_TO") or (
+        os.path.join(repo_root() or os.getcwd(), "docs", "img", "ha-entities.png")
+        if os.environ.get("HUBWIRE_UPDATE_SCREENSHOT") else None)
+    rover = rig.ha.registry()["sensor.rover_battery"]["device_id"]
+    assert "Battery" in device_page(rig.ha, rover, out)
+
+
+def test_availability_on_unplug_and_on_a_clean_stop(rig: Rig) -> None:
+    ha = rig.ha
+    rig.emus["rover"].kill()  # unplugged: the board's status goes offline
+    ha.wait_state("sensor.rover_battery", lambda s: s["state"] == "unavailable", "unavailable on unplug")
+    ha.wait_state("number.actions_blink", lambda s: s["state"] != "unavailable", "other boards available")
+    assert rig.serve.stop() == 0  # a clean stop: the service's status goes offline
+    for eid in ("sensor.actions_calls", "number.missions_speed", "sensor.large_path", "button.actions_uptime"):
+        ha.wait_state(eid, lambda s: s["state"] == "unavailable", "unavailable on a clean stop")
+
+
+def test_every_unit_mapping_is_one_home_assistant_accepts() -> None:
+    """hubwire.bridge.ha_map.UNITS against Home Assistant's own tables of units per device class
+    (sensor and number), in its venv: a unit it does not accept for the class is an error there."""
+    from hubwire.bridge.ha_map import UNITS
+    script = ("import json, sys\n"
+              "from homeassistant.components.sensor.const import DEVICE_CLASS_UNITS as S, SensorDeviceClass as SC\n"
+              "from homeassistant.components.number.const import DEVICE_CLASS_UNITS as N, NumberDeviceClass as NC\n"
+              "bad = [(c, u) for c, u in json.load(sys.stdin)\n"
+              "       if u not in S.get(SC(c), {u}) or u not in N.get(NC(c), {u})]\n"
+              "print(json.dumps(bad))\n")
+    r = subprocess.run([os.path.join(setup_ha(), "bin", "python"), "-c", script], input=json.dumps(
+        sorted(set(UNITS.values()))), capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout) == []
+
+
+#: a log line about Hubwire: one of its topics, devices or entities
+HUBWIRE = re.compile(r"hubwire|homeassistant/[a-z_]+/(rover|actions|large|large1k|missions)/|"
+                     r"\.(rover|actions|large|large1k|missions)_", re.I)
+
+
+def test_home_assistant_logged_nothing_about_hubwire(rig: Rig) -> None:
+    bad: List[str] = [ln for ln in rig.ha.log_lines()
+                      if re.search(r" (WARNING|ERROR|CRITICAL) ", ln) and HUBWIRE.search(ln)]
+    assert not bad, "\n".join(bad[:20])
