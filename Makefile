@@ -5,7 +5,7 @@ BUILD := build
 PY := .venv/bin/python
 JOBS ?= 2
 
-.PHONY: all setup test test-cpp test-avr-core test-compile-errors test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz test-docs docs emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
+.PHONY: all setup test test-cpp test-avr-core test-compile-errors test-examples test-config-limits test-arm test-manifests test-static test-python test-fuzz emulator simuno uno-firmware demo dashboard-demo bench soak fuzz-long dist clean
 
 all: emulator simuno
 
@@ -117,6 +117,7 @@ fuzz-long: setup
 # README.md to a file of the repository is checked (tools/docs/check_readme_links.py). Not -q:
 # mkdocs -q hides the warnings and then strict mode no longer counts them.
 MKDOCS := .venv/bin/mkdocs
+.PHONY: docs test-docs
 docs: setup
 	$(MAKE) test-docs
 test-docs:
