@@ -46,7 +46,7 @@ $(BUILD)/uno/MinimalBoardId/Minimal.ino.elf: $(wildcard examples/Minimal/*) $(LI
 	  $(BUILD)/uno/MinimalBoardId >/dev/null
 
 test: setup
-	$(MAKE) test-cpp test-avr-core test-compile-errors test-compile-cost test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-python
+	$(MAKE) test-cpp test-avr-core test-compile-errors test-compile-cost test-examples test-config-limits test-arm test-manifests test-fuzz test-static test-docs test-python
 	@echo "make test: all checks passed"
 
 test-cpp: cpp
@@ -128,6 +128,20 @@ soak: setup emulator
 FUZZ_SECONDS ?= 1800
 fuzz-long: setup
 	bash test/fuzz/run.sh --long $(FUZZ_SECONDS)
+
+# The documentation site from docs/ (mkdocs.yml) into $(BUILD)/site, offline: the Python API from
+# the docstrings, the sketch API from the headers' /// comments (tools/docs/sketch_api.py). Strict:
+# a broken link, a missing page or an API name that does not resolve fails it. Then every link of
+# README.md to a file of the repository is checked (tools/docs/check_readme_links.py). Not -q:
+# mkdocs -q hides the warnings and then strict mode no longer counts them.
+MKDOCS := .venv/bin/mkdocs
+.PHONY: docs test-docs
+docs: setup
+	$(MAKE) test-docs
+test-docs:
+	NO_MKDOCS_2_WARNING=1 $(MKDOCS) build --strict --clean -d $(abspath $(BUILD)/site)
+	$(PY) tools/docs/check_readme_links.py
+	@echo "docs: built into $(BUILD)/site (open $(BUILD)/site/index.html)"
 
 # The library alone, as users install it: build/dist/Hubwire-<version>.zip for the Arduino IDE's
 # "Add .ZIP Library" and the `pio pkg pack` tarball for PlatformIO (tools/dist.py, offline).

@@ -28,7 +28,7 @@
 // declaration fails to compile. The declarations and their options are in
 // src/hubwire/channels/dsl.h (declare.h gathers them); the session is src/hubwire/session/session.h
 // (class hubwire::Session, which Hubwire extends); the protocol is in docs/PROTOCOL.md.
-// The hub's own channels: remote(), hub.request() / write() / call() (README, "Both directions").
+// The hub's own channels: remote(), hub.request() / write() / call() (docs/SKETCH.md).
 #ifndef HUBWIRE_H
 #define HUBWIRE_H
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything the build, the tests, the demo and `make dist` need on Debian / Ubuntu /
 # Raspberry Pi OS: Debian packages (only those missing) and a Python venv in .venv with the hub and
-# test tools. Needs only bash and apt-get (a bare system has no make): the README's first command
+# test tools (and the documentation site's). Needs only bash and apt-get (a bare system has no make): the README's first command
 # runs it. Safe to run again: it does nothing that is already done.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,4 +40,10 @@ if [ ! -f "$stamp" ] || [ host/pyproject.toml -nt "$stamp" ]; then
   export PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1
   .venv/bin/pip install -q -e "host[test,service]" platformio
   touch "$stamp"
+fi
+# The documentation site's tools (`make docs`), installed again only when their list changes
+docs_stamp=.venv/.hubwire-docs-installed
+if [ ! -f "$docs_stamp" ] || [ tools/docs/requirements.txt -nt "$docs_stamp" ]; then
+  .venv/bin/pip install -q -r tools/docs/requirements.txt
+  touch "$docs_stamp"
 fi

@@ -51,15 +51,16 @@ constexpr Decl<T, kAction, void (*)(const ::hubwire::List<T, N>&)> action(const 
                                                                    kCallable, fn, &callListVoid< ::hubwire::List<T, N> >);
 }
 
-/// An action returning a List (list.h), whole in one answer: 1 + N elements' bytes at most
-/// HUBWIRE_MAX_RETURN.
-///   hubwire::List<uint8_t, 3> pins(uint8_t bank);   action("pins", pins)
+// A returned List travels whole in one answer: 1 + N elements' bytes at most HUBWIRE_MAX_RETURN.
 template <typename R, size_t N>
 constexpr bool checkListReturn() {
   static_assert(TypeOf<R>::code != kVoid, "Hubwire carries bool, 8/16/32-bit integers, float and double");
   static_assert(1 + N * sizeof(R) <= HUBWIRE_MAX_RETURN, "returned List larger than HUBWIRE_MAX_RETURN: raise it");
   return true;
 }
+/// An action returning a List (list.h), whole in one answer: 1 + N elements' bytes at most
+/// HUBWIRE_MAX_RETURN.
+///   hubwire::List<uint8_t, 3> pins(uint8_t bank);   action("pins", pins)
 template <typename R, size_t N, typename A>
 constexpr Decl<A, kAction, ::hubwire::List<R, N> (*)(A)> action(const char* name, ::hubwire::List<R, N> (*fn)(A)) {
   return checkValue<A, sizeof(A)>(), checkListReturn<R, N>(),
