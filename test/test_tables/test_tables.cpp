@@ -68,6 +68,11 @@ TEST(Tables, OneRecordPerChannelWithItsFlashCopies) {
   EXPECT_EQ(bench.channels[3].data, &press.id);
 }
 
+// Lists for the checks (report.h), at namespace scope: the checks take their address.
+constexpr auto twice = declared("d", expose("level", level), expose("level", level));
+constexpr auto fine = declared("d", expose("level", level), event("press", press));
+constexpr auto wrong = declared("d", expose("level", level), event("press", press), expose("bad", level).range(2, 1));
+
 TEST(Tables, NameAndTextChecks) {
   EXPECT_TRUE(validName("speed_2"));
   EXPECT_TRUE(validName("_x"));
@@ -79,14 +84,13 @@ TEST(Tables, NameAndTextChecks) {
   EXPECT_TRUE(shortText(nullptr));
   EXPECT_TRUE(shortText(std::string(255, 'a').c_str()));
   EXPECT_FALSE(shortText(std::string(256, 'a').c_str()));
-  constexpr auto l = declared("d", expose("level", level), expose("level", level));
-  EXPECT_EQ(firstMistake(l.list), 0u);  // the first of the two is reported
-  EXPECT_EQ(mistakeAt(l.list, 0), kSameName);
-  constexpr auto m = declared("d", expose("level", level), event("press", press));
-  EXPECT_EQ(firstMistake(m.list), 2u);  // none: the list's size
-  constexpr auto n = declared("d", expose("level", level), event("press", press), expose("bad", level).range(2, 1));
-  EXPECT_EQ(firstMistake(n.list), 2u);
-  EXPECT_STREQ(nameAt(n.list, 2), "bad");
+  EXPECT_EQ(firstRepeated(twice.list), 0u);  // the first of the two is reported
+  EXPECT_FALSE((NamesUnique<decltype(twice), &twice>::value));
+  EXPECT_EQ(firstRepeated(fine.list), 2u);  // none: the list's size
+  EXPECT_TRUE((NamesUnique<decltype(fine), &fine>::value));
+  EXPECT_EQ((FirstMistake<decltype(fine), &fine>::value), 2u);
+  EXPECT_EQ((FirstMistake<decltype(wrong), &wrong>::value), 2u);
+  EXPECT_TRUE((Report<decltype(fine), &fine, false>::ok));
 }
 
 }  // namespace

@@ -17,7 +17,7 @@
 namespace hubwire {
 namespace declare {
 
-// The index of the first non-zero code (N: none). Passed by value: GCC 5 would copy a constant
+// The index of the first non-zero code before the end mark (N - 1: none). Passed by value: GCC 5 would copy a constant
 // array at every read.
 template <size_t N>
 struct Codes {
@@ -25,7 +25,7 @@ struct Codes {
 };
 template <size_t N>
 constexpr size_t firstSet(const Codes<N> c, size_t i = 0) {
-  return i < N && c.m[i] == kNoMistake ? firstSet(c, i + 1) : i;
+  return i + 1 < N && c.m[i] == kNoMistake ? firstSet(c, i + 1) : i;  // m[N - 1]: an end mark
 }
 // The index of the first declaration whose name a later one repeats (the list's size: none).
 constexpr size_t firstRepeated(const List<>&, size_t i = 0) { return i; }
@@ -41,6 +41,8 @@ template <typename D, const D* Decls, size_t... I>
 struct FirstMistake<D, Decls, cx::Seq<I...> > {
   static constexpr size_t value = firstSet(Codes<sizeof...(I) + 1>{{(uint8_t)DeclAt<D, Decls, I>::decl.mistake()..., 0}});
 };
+template <typename D, const D* Decls, size_t... I>
+constexpr size_t FirstMistake<D, Decls, cx::Seq<I...> >::value;
 
 // The I-th declaration's name, spelled for the compiler's message.
 template <typename D, const D* Decls, size_t I, typename K = typename cx::MakeSeq<textLength(DeclAt<D, Decls, I>::decl.name())>::type>
