@@ -22,6 +22,7 @@ from ..hub import HubChannels
 from ..hub_face import HubMethods
 from ..session import LinkHealth, ReceivedEvent, StreamSample
 from .hub_client import RemoteHub
+from .remote_missions import RemoteMissions
 from .protocol import MAX_LINE, PROTOCOL, ServiceNotRunning, encode, raise_error, socket_path
 from .streams import RemoteEvents, RemoteStream
 
@@ -169,7 +170,7 @@ async def connect(board: str, *, timeout: float = 5.0, path: Optional[str] = Non
     return dev
 
 
-class AsyncRemoteDevice(HubMethods, AsyncBoardAPI):
+class AsyncRemoteDevice(HubMethods, RemoteMissions, AsyncBoardAPI):
     """A board through ``hubwire serve``: :class:`hubwire.board.AsyncBoardAPI`, as
     :class:`hubwire.aio.AsyncDevice` is, hub channels as a direct device's (``hub``, ``provide``...
     ``notify``; client/hub_client.py). Closing it ends this client's subscriptions and lets go of its
@@ -351,44 +352,6 @@ class AsyncRemoteDevice(HubMethods, AsyncBoardAPI):
         ch, payload = ops.call_payload(self._desc, name, arg)
         raw = await self.control_raw(ch, payload, timeout)
         return None if raw is None or ch.returns is None else ch.returns.decode(raw)
-
-    # ---------------------------------------------------------- missions (remote_missions.py)
-
-    async def start_run(self, name: str, goal: Any = None, *, timeout: Optional[float] = None,
-                        run_id: Optional[str] = None, dispatch: Any = None) -> "tuple[Any, str]":
-        """Start mission ``name`` through the service (goal checked here first, as direct) and
-        follow the run: its local record and run id."""
-        from .remote_missions import follow_run
-
-        ch, payload = ops.mission_start(self._desc, name, goal)
-        extra = {} if run_id is None else {"run_id": run_id}
-        reply = await self.conn.request("start", board=self.key, channel=ch.name, raw=payload[1:].hex(),
-                                        timeout=timeout, **extra)
-        rid = str(reply["run"]["run_id"])
-        return await (follow_run(self, rid) if dispatch is None else follow_run(self, rid, dispatch))
-
-    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None,
-                    run_id: Optional[str] = None) -> Any:
-        """As :meth:`AsyncDevice.start`; the run belongs to the service (``job.run_id`` names it
-        there: a start repeated with the same ``run_id`` starts nothing new)."""
-        from .remote_missions import AsyncRemoteJob
-
-        rec, rid = await self.start_run(name, goal, timeout=timeout, run_id=run_id)
-        return AsyncRemoteJob(self, rec, rid)
-
-    async def follow(self, run_id: str) -> Any:
-        """The job of a run the service has (started by any client), from its first progress value."""
-        from .remote_missions import AsyncRemoteJob, follow_run
-
-        rec, rid = await follow_run(self, run_id)
-        return AsyncRemoteJob(self, rec, rid)
-
-    async def cancel_run(self, run_id: str, *, timeout: Optional[float] = None) -> bool:
-        return bool((await self.conn.request("cancel", run_id=run_id, timeout=timeout))["cancelled"])
-
-    async def runs(self) -> List[Dict[str, Any]]:
-        """The runs the service keeps of this board (docs/SERVICE.md "Missions")."""
-        return list((await self.conn.request("runs", board=self.key))["runs"])
 
     def sample(self, ch: Channel, s: Dict[str, Any]) -> StreamSample:
         return StreamSample(ch.codec.decode(bytes.fromhex(s["raw"])), int(s["since_ms"]), int(s["seq"]),

@@ -11,17 +11,19 @@ from __future__ import annotations
 
 import asyncio
 from types import SimpleNamespace
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, cast
 
+from .. import ops
 from ..errors import MissionCancelled, MissionError, MissionFailed, MissionLost
 from ..job import AsyncJob, Job
 from ..session.missions import MissionRun
 from .protocol import raise_error
 
 if TYPE_CHECKING:
-    from .connection import AsyncRemoteDevice
+    from ..descriptor import Descriptor
+    from .connection import AsyncRemoteDevice, Connection
 
-__all__ = ["RunFeed", "AsyncRemoteJob", "RemoteJob", "follow_run", "outcome_error"]
+__all__ = ["RunFeed", "AsyncRemoteJob", "RemoteJob", "RemoteMissions", "follow_run", "outcome_error"]
 
 Dispatch = Callable[..., Any]
 
@@ -154,3 +156,41 @@ class RemoteJob(Job):
         if self._rec.done:
             return False
         return bool(self._session._run(self._session.remote.cancel_run(self.run_id, timeout=timeout)))
+
+
+class RemoteMissions:
+    """The mission members of :class:`AsyncRemoteDevice` (``conn``, ``key`` and ``_desc`` are its)."""
+
+    conn: "Connection"
+    key: str
+    _desc: "Descriptor"
+
+    async def start_run(self, name: str, goal: Any = None, *, timeout: Optional[float] = None,
+                        run_id: Optional[str] = None, dispatch: Any = None) -> "tuple[Any, str]":
+        """Start mission ``name`` through the service (goal checked here first, as direct) and
+        follow the run: its local record and run id."""
+        ch, payload = ops.mission_start(self._desc, name, goal)
+        extra = {} if run_id is None else {"run_id": run_id}
+        reply = await self.conn.request("start", board=self.key, channel=ch.name, raw=payload[1:].hex(),
+                                        timeout=timeout, **extra)
+        rid = str(reply["run"]["run_id"])
+        return await (follow_run(cast("AsyncRemoteDevice", self), rid) if dispatch is None else follow_run(cast("AsyncRemoteDevice", self), rid, dispatch))
+
+    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None,
+                    run_id: Optional[str] = None) -> Any:
+        """As :meth:`AsyncDevice.start`; the run belongs to the service (``job.run_id`` names it
+        there: a start repeated with the same ``run_id`` starts nothing new)."""
+        rec, rid = await self.start_run(name, goal, timeout=timeout, run_id=run_id)
+        return AsyncRemoteJob(cast("AsyncRemoteDevice", self), rec, rid)
+
+    async def follow(self, run_id: str) -> Any:
+        """The job of a run the service has (started by any client), from its first progress value."""
+        rec, rid = await follow_run(cast("AsyncRemoteDevice", self), run_id)
+        return AsyncRemoteJob(cast("AsyncRemoteDevice", self), rec, rid)
+
+    async def cancel_run(self, run_id: str, *, timeout: Optional[float] = None) -> bool:
+        return bool((await self.conn.request("cancel", run_id=run_id, timeout=timeout))["cancelled"])
+
+    async def runs(self) -> List[Dict[str, Any]]:
+        """The runs the service keeps of this board (docs/SERVICE.md "Missions")."""
+        return list((await self.conn.request("runs", board=self.key))["runs"])
