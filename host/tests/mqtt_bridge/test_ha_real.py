@@ -29,6 +29,7 @@ from service.conftest import HOST, Serve
 from simuno.conftest import Simuno, example_elf, simuno_binary
 
 from .conftest import MOSQUITTO, Broker
+from .helpers import f32_shortest
 from .real_ha import STATE_S, HomeAssistant, setup_ha, wait
 
 pytestmark = pytest.mark.home_assistant
@@ -337,6 +338,9 @@ def test_a_mission_started_from_home_assistant_ends_with_one_result(rig: Rig) ->
     drive = ha.wait_state("sensor.missions_drive", lambda s: s["attributes"].get("run_id") == "ha-2"
                           and s["state"] == "succeeded", "the last run succeeded")
     assert drive["attributes"]["run"] == second["run"] and abs(drive["attributes"]["value"] - 0.5) < 0.2, drive
+    # an f32 as the board has it (0.45, not the double 0.4500000178813934 it reads back as)
+    progress = drive["attributes"]["progress"]
+    assert progress is not None and progress == f32_shortest(progress), drive
 
 
 def test_the_rover_on_its_device_page(rig: Rig) -> None:
