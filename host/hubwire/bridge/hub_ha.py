@@ -11,7 +11,8 @@
 Entities join the board's device (``hubwire_<key>``, described as in :func:`.ha.device`) with unique
 ids ``hubwire_<key>--hub-<channel>`` and object ids ``hub-<channel>``: no board channel has a ``-``
 in its name, so none collides. Names and units are the board channels' (``Hub setpoint``, a unit
-``C`` as ``°C`` with device class ``temperature``: :mod:`.ha_map`).
+``C`` as ``°C`` with device class ``temperature``: :mod:`.ha_map`). Every entity is unavailable
+while the service is away; what the board writes or calls also while the board is.
 """
 from __future__ import annotations
 
@@ -53,6 +54,11 @@ def entity(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id
         "availability": [{"topic": topics.service_status(service_id), "payload_available": ONLINE,
                           "payload_not_available": OFFLINE}],
     }
+    if "w" in exp.access or "c" in exp.access:
+        # what the board writes or calls goes with the board; a value it reads, or an event for it,
+        # may be set while it is away (it gets it when it is back)
+        cfg["availability"].append({"topic": topics.status(key), "payload_available": ONLINE,
+                                    "payload_not_available": OFFLINE})
     lo, hi = _range(exp)
     kind: Optional[str] = None
     if "c" in exp.access:

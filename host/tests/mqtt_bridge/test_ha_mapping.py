@@ -231,3 +231,13 @@ def test_hub_channels_join_the_boards_device_with_readable_names_and_unit_classe
     assert render(setpoint["value_template"], "null") == "None"  # a NaN: unknown, not an error
     assert render(setpoint["value_template"], "21.5") == "21.5"
     assert hub[("sensor", "hub-report")]["state_class"] == "measurement"
+
+
+def test_what_the_board_writes_or_calls_is_unavailable_with_the_board_the_hubs_values_are_not() -> None:
+    hub = hub_entities(THERMO, "thermostat")
+    service = {"topic": "hubwire/_service/host1/status", "payload_available": "online", "payload_not_available": "offline"}
+    board = dict(service, topic="hubwire/thermostat/status")
+    for key in (("sensor", "hub-report"), ("event", "hub-alarm")):
+        assert hub[key]["availability"] == [service, board] and hub[key]["availability_mode"] == "all", key
+    for key in (("number", "hub-setpoint"), ("number", "hub-mode"), ("select", "hub-away")):
+        assert hub[key]["availability"] == [service], key  # set while the board is away: it gets it when back

@@ -364,6 +364,14 @@ def test_availability_on_unplug_and_on_a_clean_stop(rig: Rig) -> None:
     rig.emus["rover"].kill()  # unplugged: the board's status goes offline
     ha.wait_state("sensor.rover_battery", lambda s: s["state"] == "unavailable", "unavailable on unplug")
     ha.wait_state("number.actions_blink", lambda s: s["state"] != "unavailable", "other boards available")
+    # the Thermostat unplugged: what the board writes and calls goes with it; the hub's own values
+    # stay (a setpoint or a mode set now is the board's once it is back)
+    rig.uno.stop()
+    for eid in ("sensor.thermostat_temperature", "sensor.thermostat_hub_report", "event.thermostat_hub_alarm"):
+        ha.wait_state(eid, lambda s: s["state"] == "unavailable", "unavailable on unplug")
+    for eid, state in (("number.thermostat_hub_setpoint", "5.0"), ("number.thermostat_hub_mode", "1")):
+        got = ha.state(eid)
+        assert got is not None and got["state"] == state, got
     assert rig.serve.stop() == 0  # a clean stop: the service's status goes offline
     for eid in ("sensor.actions_calls", "number.missions_speed", "sensor.large_path", "button.actions_uptime",
                 "number.thermostat_hub_setpoint", "sensor.missions_drive"):
