@@ -181,5 +181,7 @@ async def _follow(bridge: "Bridge", e: RunEntry) -> None:
             else to_json(None, o["value"])
     body = {"run_id": e.run_id, "run": e.job.run if e.job is not None else None, **o}
     bridge.outbox.put_event(topic(t, e.key, e.mission, "result"), dumps(body))
+    if e.job is None and any(o.mission == e.mission and not o.done for o in runs_of(bridge.fleet).of_board(e.key)):
+        return  # a start refused while a run goes (BUSY): the state stays that run's
     bridge.outbox.put_latest(state, dumps({**_state(e, last), **{k: v for k, v in body.items() if k != "run"}}))
 

@@ -344,6 +344,28 @@ def test_a_mission_started_from_home_assistant_ends_with_one_result(rig: Rig) ->
     assert progress is not None and progress == f32_shortest(progress), drive
 
 
+def test_a_start_refused_while_a_run_goes_leaves_the_run_on_the_sensor_and_a_cancel_ends_it(rig: Rig) -> None:
+    ha = rig.ha
+    base = "hubwire/missions/mission/drive"
+    ha.call("number", "set_value", entity_id="number.missions_speed", value=0.2)  # 10 m: 50 s
+    ha.wait_state("number.missions_speed", lambda s: s["state"] == "0.2", "0.2 read back")
+    ha.call("mqtt", "publish", topic=f"{base}/start", qos=1, payload='{"run_id": "ha-3", "goal": 10}')
+    going = ha.wait_state("sensor.missions_drive", lambda s: s["attributes"].get("run_id") == "ha-3"
+                          and s["state"] == "running" and s["attributes"].get("progress"), "ha-3 driving")
+    assert 0 < going["attributes"]["progress"] < 10
+
+    def busy_then_cancel() -> None:
+        refused = json.loads(rig.mqtt_one(f"{base}/result", lambda: ha.call(
+            "mqtt", "publish", topic=f"{base}/start", qos=1, payload='{"run_id": "ha-4", "goal": 1}')))
+        assert (refused["run_id"], refused["status"], refused.get("nak")) == ("ha-4", "refused", "BUSY"), refused
+        ha.call("mqtt", "publish", topic=f"{base}/cancel", qos=1, payload='{"run_id": "ha-3"}')
+    changes = ha.state_changes("sensor.missions_drive", busy_then_cancel,
+                               lambda got: any(s["state"] == "cancelled" for s in got))
+    # the refused start did not replace the run that went on: the sensor followed ha-3 to its end
+    shown = [(s["state"], s["attributes"].get("run_id")) for s in changes]
+    assert all(rid == "ha-3" for _, rid in shown) and shown[-1] == ("cancelled", "ha-3"), shown
+
+
 def test_the_rover_on_its_device_page(rig: Rig) -> None:
     if sys.version_info < (3, 10) or not os.path.exists("/usr/bin/chromium"):
         pytest.skip("chromium and Playwright (Python 3.10+) take the screenshot")

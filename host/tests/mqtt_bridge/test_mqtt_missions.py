@@ -122,6 +122,9 @@ def test_goal_progress_result_busy_and_cancel_over_mqtt(served: Tuple[Serve, Bro
     assert (r3["status"], r3["error"], r3["nak"], r3["run"]) == ("refused", "Nak", "BUSY", None)
     pub(broker, f"{BASE}/cancel", '{"run_id": "nr-2"}')
     wait_for(lambda: results(log, "nr-2"), DEADLINE, "nr-2 cancelled")
+    # the refused start did not take the retained state from the run that went on
+    assert [st["run_id"] for st in on(log, f"{BASE}/state") if st["run_id"] in ("nr-2", "nr-3")][-1:] == ["nr-2"]
+    assert not [st for st in on(log, f"{BASE}/state") if st["run_id"] == "nr-3"]
     assert results(log, "nr-2") == [{"run_id": "nr-2", "run": 2, "status": "cancelled", "error": "MissionCancelled",
                                      "message": "mission 'drive' run 2 was cancelled"}]
     # a start without run id: the bridge names the run; the retained state shows the latest run
