@@ -14,7 +14,7 @@ from ..wire.scalars import INTEGER_TYPES, NUMERIC_TYPES, SCALARS
 from .ha_map import MAX_STATE, NUMERIC, TEXT, is_counter, json_text, readable_name, unit_class, value_keys
 from .topics import OFFLINE, ONLINE, Topics, dumps, level
 
-__all__ = ["entity_kind", "entity_kinds", "entity_configs", "discovery_messages", "config_topic", "ORIGIN"]
+__all__ = ["entity_kind", "entity_kinds", "entity_configs", "discovery_messages", "config_topic", "device", "ORIGIN"]
 
 ORIGIN = {"name": "hubwire", "sw_version": __version__,
           "support_url": "https://github.com/hubwire/hubwire/blob/main/docs/MQTT.md"}
@@ -40,7 +40,7 @@ def entity_kinds(ch: Channel) -> List[str]:
     if ch.is_event:
         return ["event"]
     if ch.mission:
-        return []
+        return ["sensor"]  # its last run (the retained mission state); started by its topics
     if ch.callable:
         if ch.codec.kind == "void":
             kinds = ["button"]
@@ -100,7 +100,9 @@ def _unique(topics: Topics, key: str, channel: str) -> str:
     return f"hubwire_{_node(topics, key)}--{level(channel)}"
 
 
-def _device(topics: Topics, key: str, desc: Descriptor, board_id: Optional[str]) -> Dict[str, Any]:
+def device(topics: Topics, key: str, desc: Descriptor, board_id: Optional[str]) -> Dict[str, Any]:
+    """The board's Home Assistant device, the same in every config that names it (its hub
+    channels' too): Home Assistant takes the device's name from whichever config came last."""
     # "rover--A1B2" shows as "Rover A1B2" (entity names follow: "Rover Battery")
     shown = key.replace("---", " ").replace("--", " ")
     dev: Dict[str, Any] = {"identifiers": [f"hubwire_{_node(topics, key)}"], "name": shown[:1].upper() + shown[1:],
@@ -127,7 +129,7 @@ def _base(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id:
     return {
         "name": name,
         "unique_id": _unique(topics, key, ch.name) + unique_suffix,
-        "device": _device(topics, key, desc, board_id),
+        "device": device(topics, key, desc, board_id),
         "origin": ORIGIN,
         "availability": [
             {"topic": topics.service_status(service_id), "payload_available": ONLINE,
@@ -192,6 +194,11 @@ def entity_configs(topics: Topics, service_id: str, key: str, desc: Descriptor, 
             if "json_attributes_template" in keys:
                 rcfg["json_attributes_topic"] = result
             out.append((rkind, rcfg))
+    elif ch.mission:
+        # the retained state of the mission's last run: its status as the state, the run (run id,
+        # progress, result) as attributes; no unit or state class: the status is text
+        run = topics.board(key, "mission", level(ch.name), "state")
+        cfg.update(state_topic=run, value_template="{{ value_json.status }}", json_attributes_topic=run)
     elif kind == "switch":
         # a write-only one too: the bridge publishes the value the board accepted on its state topic
         cfg.update(command_topic=topics.command(key, "set", ch.name), payload_on="true", payload_off="false",

@@ -8,22 +8,23 @@
 | calls an action (`alarm`) | `event` (each call) | `.../call` | |
 | takes events (`mode`) | `number` (a box: sending one is `number.set_value`), `select` for a bool | the value topic (last sent) | `.../set` |
 
-Entities join the board's device (``hubwire_<key>``) with unique ids ``hubwire_<key>--hub-<channel>``
-and object ids ``hub-<channel>``: no board channel has a ``-`` in its name, so none collides.
+Entities join the board's device (``hubwire_<key>``, described as in :func:`.ha.device`) with unique
+ids ``hubwire_<key>--hub-<channel>`` and object ids ``hub-<channel>``: no board channel has a ``-``
+in its name, so none collides. Names and units are the board channels' (``Hub setpoint``, a unit
+``C`` as ``°C`` with device class ``temperature``: :mod:`.ha_map`). Every entity is unavailable
+while the service is away; what the board writes or calls also while the board is.
 """
 from __future__ import annotations
 
 from typing import Any, Dict, List, Optional, Tuple
 
-from .. import __version__
 from ..descriptor import Channel, Descriptor
 from ..wire.scalars import INTEGER_TYPES, NUMERIC_TYPES, SCALARS
+from .ha import ORIGIN, device
+from .ha_map import NUMERIC, readable_name, unit_class
 from .topics import OFFLINE, ONLINE, Topics, dumps, level
 
 __all__ = ["hub_discovery", "entity"]
-
-ORIGIN = {"name": "hubwire", "sw_version": __version__,
-          "support_url": "https://github.com/hubwire/hubwire/blob/main/docs/MQTT.md"}
 
 
 def _scalar(ch: Channel) -> Optional[str]:
@@ -46,16 +47,18 @@ def entity(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id
     node = topics.board(key).rpartition("/")[2]
     value = topics.board(key, "hub", level(exp.name))
     t = _scalar(exp)
-    dev: Dict[str, Any] = {"identifiers": [f"hubwire_{node}"], "name": key, "manufacturer": "Hubwire",
-                           "model": desc.name}
-    if board_id:
-        dev["serial_number"] = board_id
     cfg: Dict[str, Any] = {
-        "name": f"hub {exp.name}", "unique_id": f"hubwire_{node}--hub-{level(exp.name)}", "device": dev,
+        "name": readable_name(f"hub_{exp.name}", exp.unit), "unique_id": f"hubwire_{node}--hub-{level(exp.name)}",
+        "device": device(topics, key, desc, board_id),
         "origin": ORIGIN, "availability_mode": "all",
         "availability": [{"topic": topics.service_status(service_id), "payload_available": ONLINE,
                           "payload_not_available": OFFLINE}],
     }
+    if "w" in exp.access or "c" in exp.access:
+        # what the board writes or calls goes with the board; a value it reads, or an event for it,
+        # may be set while it is away (it gets it when it is back)
+        cfg["availability"].append({"topic": topics.status(key), "payload_available": ONLINE,
+                                    "payload_not_available": OFFLINE})
     lo, hi = _range(exp)
     kind: Optional[str] = None
     if "c" in exp.access:
@@ -72,6 +75,7 @@ def entity(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id
                 cfg["options"] = ["false", "true"]
         elif t in NUMERIC_TYPES:
             kind = "number"
+            cfg["value_template"] = NUMERIC  # null (a NaN) is no value, not an error
             ranged = exp.min is not None and exp.max is not None
             low, high = float(lo if lo is not None else -1e9), float(hi if hi is not None else 1e9)
             cfg.update(min=low, max=high, mode="slider" if ranged else "box",
@@ -89,12 +93,16 @@ def entity(topics: Topics, service_id: str, key: str, desc: Descriptor, board_id
             kind = "sensor"
             if t in NUMERIC_TYPES:
                 cfg["state_class"] = "measurement"
+                cfg["value_template"] = NUMERIC
             else:
                 cfg["value_template"] = "{{ value_json }}"
     if kind is None:
         return None
-    if exp.unit and kind in ("sensor", "number"):
-        cfg["unit_of_measurement"] = exp.unit
+    cls, unit = unit_class(exp.unit, exp.name)
+    if unit and kind in ("sensor", "number") and t in NUMERIC_TYPES:
+        cfg["unit_of_measurement"] = unit
+        if cls:
+            cfg["device_class"] = cls
     return kind, cfg
 
 

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple
 from ..errors import HubwireError, NakError
 from ..daemon.mission_ops import outcome_json, wait_change
 from ..daemon.mission_runs import RunEntry, Usage, check_run_id, runs_of  # Usage: the service's refusal
-from .topics import BadPayload, Topics, dumps, level, parse_value, to_json
+from .topics import BadPayload, Topics, codec_json, dumps, level, parse_value, to_json
 
 if TYPE_CHECKING:
     from .board import BoardBridge
@@ -161,7 +161,7 @@ async def _follow(bridge: "Bridge", e: RunEntry) -> None:
         while True:
             items, nxt = rec.progress_from(index)
             for i, v in enumerate(items, nxt - len(items)):
-                last = to_json(None, ch.progress.to_json(v) if ch.progress is not None else None)
+                last = codec_json(ch.progress, v) if ch.progress is not None else None
                 await bridge.send(topic(t, e.key, e.mission, "progress"),
                                   dumps({"run_id": e.run_id, "run": rec.run, "index": i, "value": last}))
             if items:
@@ -176,9 +176,12 @@ async def _follow(bridge: "Bridge", e: RunEntry) -> None:
                 await wait_change(rec)
     o = outcome_json(e)
     o.pop("raw", None)
-    if "value" in o:
-        o["value"] = to_json(None, o["value"])
+    if "value" in o:  # an f32 as its shortest decimal, as every state
+        o["value"] = to_json(e.job._rec.channel, e.job._rec.result, returns=True) if e.job is not None \
+            else to_json(None, o["value"])
     body = {"run_id": e.run_id, "run": e.job.run if e.job is not None else None, **o}
     bridge.outbox.put_event(topic(t, e.key, e.mission, "result"), dumps(body))
+    if e.job is None and any(o.mission == e.mission and not o.done for o in runs_of(bridge.fleet).of_board(e.key)):
+        return  # a start refused while a run goes (BUSY): the state stays that run's
     bridge.outbox.put_latest(state, dumps({**_state(e, last), **{k: v for k, v in body.items() if k != "run"}}))
 

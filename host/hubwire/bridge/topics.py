@@ -16,7 +16,7 @@ from typing import Any, Dict, Optional, Tuple
 from ..daemon.keys import board_key, level, safe_id
 from ..descriptor import Channel
 
-__all__ = ["BridgeConfig", "Topics", "OPS", "ONLINE", "OFFLINE", "BadPayload", "to_json", "dumps",
+__all__ = ["BridgeConfig", "Topics", "OPS", "ONLINE", "OFFLINE", "BadPayload", "to_json", "codec_json", "dumps",
            "parse_value", "safe_id", "level", "board_key"]
 
 ONLINE = "online"
@@ -147,7 +147,11 @@ def to_json(ch: Optional[Channel], value: Any, returns: bool = False) -> Any:
     """JSON form of a value of ``ch`` (its return value when ``returns``): structs become objects,
     arrays lists; NaN and infinities become None (JSON has no such numbers); an f32 is its
     shortest decimal (0.1, not the double 0.10000000149011612 it reads back as)."""
-    codec = (ch.returns if returns else ch.codec) if ch is not None else None
+    return codec_json((ch.returns if returns else ch.codec) if ch is not None else None, value)
+
+
+def codec_json(codec: Any, value: Any) -> Any:
+    """As :func:`to_json`, for a value of ``codec`` (a mission's progress, say); None: as it is."""
     v = codec.to_json(value) if codec is not None else value
     return _finite(_short_f32(codec, v) if codec is not None else v)
 

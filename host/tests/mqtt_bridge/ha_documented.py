@@ -37,6 +37,8 @@ KEYS: Dict[str, FrozenSet[str]] = {
                                 "payload_on", "state_topic", "value_template"},
     "text": _COMMON | {"command_template", "command_topic", "max", "min", "mode", "pattern",
                        "retain", "state_topic", "value_template"},
+    "select": _COMMON | {"command_template", "command_topic", "optimistic", "options", "retain",
+                         "state_topic", "value_template"},
 }
 
 #: required keys (``platform`` only in device-based discovery, which the bridge does not use)
@@ -48,6 +50,7 @@ REQUIRED: Dict[str, FrozenSet[str]] = {
     "event": frozenset({"state_topic", "event_types"}),
     "binary_sensor": frozenset({"state_topic"}),
     "text": frozenset({"command_topic"}),
+    "select": frozenset({"command_topic", "options"}),
 }
 
 DEVICE_KEYS = frozenset({"configuration_url", "connections", "hw_version", "identifiers", "manufacturer",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import struct
 import uuid
 from dataclasses import dataclass
 from typing import Any, AsyncIterator, Dict, List, Optional, Tuple
@@ -185,3 +186,9 @@ async def watcher(port: int, *topics: str, identifier: Optional[str] = None, per
             yield w
         finally:
             w.close()
+
+
+def f32_shortest(x: float) -> float:
+    """The shortest decimal that is the same f32 as ``x`` (what the bridge publishes for an f32)."""
+    same = struct.pack("<f", x)
+    return next(float(f"{x:.{d}g}") for d in range(1, 10) if struct.pack("<f", float(f"{x:.{d}g}")) == same)

@@ -208,6 +208,10 @@ class HomeAssistant:
         """The entity registry: entity_id -> entry (platform, unique_id, entity_category, ...)."""
         return {e["entity_id"]: e for e in self.ws({"type": "config/entity_registry/list"})[0]}
 
+    def devices(self) -> List[Dict[str, Any]]:
+        """The device registry's entries (id, name, model, ...)."""
+        return self.ws({"type": "config/device_registry/list"})[0]  # type: ignore[no-any-return]
+
     def state_changes(self, entity_id: str, action: Callable[[], Any], done: Callable[[List[Dict[str, Any]]], bool],
                       timeout: float = STATE_S) -> List[Dict[str, Any]]:
         """The new states of ``entity_id`` from before ``action`` until ``done(states)``."""

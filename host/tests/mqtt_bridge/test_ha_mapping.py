@@ -177,3 +177,67 @@ def test_an_entity_that_moved_platform_clears_the_config_of_earlier_versions() -
     assert msgs["homeassistant/sensor/b/name/config"] == ""  # was a sensor, now text
     assert msgs["homeassistant/text/b/name/config"]
     assert "homeassistant/sensor/b/battery/config" in msgs and msgs["homeassistant/sensor/b/battery/config"]
+
+
+MISSIONS = ('{"p":1,"n":"missions","ch":[{"id":1,"n":"drive","a":"m","t":"f32","u":"m","min":0.1,"max":10,'
+            '"rt":"f32","pt":"f32","pmax":10},{"id":2,"n":"speed","a":"rw","t":"f32","u":"m/s","min":0.1,"max":2}]}')
+THERMO = ('{"p":1,"n":"thermostat","fw":"1.0","ch":[{"id":1,"n":"temperature","a":"r","t":"f32","u":"C"}],"hub":['
+          '{"id":1,"n":"setpoint","a":"r","t":"f32","u":"C"},{"id":2,"n":"report","a":"w","t":"u16"},'
+          '{"id":3,"n":"alarm","a":"c","t":"f32","rt":"bool"},{"id":4,"n":"mode","a":"e","t":"u8"},'
+          '{"id":5,"n":"away","a":"e","t":"bool"}]}')
+
+
+def test_a_mission_is_a_sensor_of_its_last_run() -> None:
+    cfg = entities(MISSIONS)[("sensor", "drive")]
+    assert cfg["state_topic"] == cfg["json_attributes_topic"] == "hubwire/b/mission/drive/state"
+    assert cfg["name"] == "Drive" and cfg["unique_id"] == "hubwire_b--drive"
+    assert "unit_of_measurement" not in cfg and "state_class" not in cfg and "device_class" not in cfg
+    state = '{"run_id":"ha-1","run":3,"status":"succeeded","progress":0.4,"received":4,"value":0.5}'
+    assert render(cfg["value_template"], state) == "succeeded"
+    assert render(cfg["value_template"], '{"run_id":"x","status":"link lost"}') == "link lost"
+    assert set(entities(MISSIONS)) == {("sensor", "drive"), ("number", "speed")}
+
+
+def hub_entities(raw: str, key: str = "b") -> Dict[Tuple[str, str], Dict[str, Any]]:
+    """The hub channels' entities, every key checked as for a board channel."""
+    from hubwire.bridge.hub_ha import hub_discovery
+
+    desc = parse_descriptor(raw.encode())
+    out: Dict[Tuple[str, str], Dict[str, Any]] = {}
+    for topic, payload in hub_discovery(Topics(), "host1", key, desc, "A1", [c.name for c in desc.hub]):
+        m = doc.TOPIC.match(topic)
+        assert m is not None, topic
+        cfg = json.loads(payload)
+        kind = m["component"]
+        assert set(cfg) <= doc.KEYS[kind], (kind, set(cfg) - doc.KEYS[kind])
+        assert doc.REQUIRED[kind] <= set(cfg)
+        out[(kind, m["obj"])] = cfg
+    return out
+
+
+def test_hub_channels_join_the_boards_device_with_readable_names_and_unit_classes() -> None:
+    key = "thermostat--A1"
+    desc = parse_descriptor(THERMO.encode())
+    board = ha.entity_configs(Topics(), "host1", key, desc, "A1", desc.channels[0])[0][1]
+    hub = hub_entities(THERMO, key)
+    assert set(hub) == {("number", "hub-setpoint"), ("sensor", "hub-report"), ("event", "hub-alarm"),
+                        ("number", "hub-mode"), ("select", "hub-away")}
+    for cfg in hub.values():
+        # one device: the same name, so HA does not rename it to whichever config came last
+        assert cfg["device"] == board["device"] and cfg["device"]["name"] == "Thermostat A1"
+    setpoint = hub[("number", "hub-setpoint")]
+    assert setpoint["name"] == "Hub setpoint"
+    assert (setpoint["device_class"], setpoint["unit_of_measurement"]) == ("temperature", "°C")
+    assert render(setpoint["value_template"], "null") == "None"  # a NaN: unknown, not an error
+    assert render(setpoint["value_template"], "21.5") == "21.5"
+    assert hub[("sensor", "hub-report")]["state_class"] == "measurement"
+
+
+def test_what_the_board_writes_or_calls_is_unavailable_with_the_board_the_hubs_values_are_not() -> None:
+    hub = hub_entities(THERMO, "thermostat")
+    service = {"topic": "hubwire/_service/host1/status", "payload_available": "online", "payload_not_available": "offline"}
+    board = dict(service, topic="hubwire/thermostat/status")
+    for key in (("sensor", "hub-report"), ("event", "hub-alarm")):
+        assert hub[key]["availability"] == [service, board] and hub[key]["availability_mode"] == "all", key
+    for key in (("number", "hub-setpoint"), ("number", "hub-mode"), ("select", "hub-away")):
+        assert hub[key]["availability"] == [service], key  # set while the board is away: it gets it when back

@@ -1,9 +1,11 @@
 """A real Home Assistant core (from PyPI, tools/ha/setup-ha.sh, cached) with its MQTT integration
-added through the config flow on a private mosquitto, and `hubwire serve --mqtt` owning five
-emulated boards (the Rover, examples/Actions, examples/LargeValues, extras/tests/Large1K,
-examples/Missions). Everything is asserted through Home Assistant's REST and websocket APIs: the
-entities it registered, commands from it reaching the boards, events once, a refused write,
-availability on unplug and on a clean stop, and its log naming no Hubwire entity or topic.
+added through the config flow on a private mosquitto, and `hubwire serve --mqtt --mqtt-hub
+'thermostat/*'` owning five emulated boards (the Rover, examples/Actions, examples/LargeValues,
+extras/tests/Large1K, examples/Missions) and examples/Thermostat on a simulated Uno, its hub
+channels backed from MQTT. Everything is asserted through Home Assistant's REST and websocket APIs:
+the entities it registered, commands from it reaching the boards, the Thermostat's setpoint and
+mode set from it, a mission started from it, events once, a refused write, availability on unplug
+and on a clean stop, and its log naming no Hubwire entity or topic.
 
 Set HUBWIRE_UPDATE_SCREENSHOT=1 to write docs/img/ha-entities.png (the Rover's device page with its
 entities, in chromium; HUBWIRE_SCREENSHOT_TO=FILE writes it elsewhere).
@@ -13,26 +15,19 @@ from __future__ import annotations
 import json
 import os
 import re
-import select
 import subprocess
 import sys
-import time
-from typing import Any, Dict, Iterator, List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import pytest
 
-from conftest import Emulator
-from hubwire.testing import emulator_binary, repo_root
-from service.conftest import HOST, Serve
+from hubwire.testing import repo_root
 
-from .conftest import MOSQUITTO, Broker
-from .real_ha import STATE_S, HomeAssistant, setup_ha, wait
+from .ha_rig import Rig, rig_fixture  # noqa: F401  (the fixture `rig`)
+from .helpers import f32_shortest
+from .real_ha import STATE_S, setup_ha, wait
 
 pytestmark = pytest.mark.home_assistant
-
-EMULATORS = {"rover": "hubwire-emulator", "actions": "hubwire-actions-emulator",
-             "large": "hubwire-largevalues-emulator", "large1k": "hubwire-large-emulator",
-             "missions": "hubwire-missions-emulator"}
 
 #: entity -> (device_class, unit, entity_category, state_class) as Home Assistant must show them
 #: (docs/MQTT.md, "Entity mapping"); None: not set
@@ -73,87 +68,24 @@ EXPECTED: Dict[str, Tuple[Optional[str], Optional[str], Optional[str], Optional[
     "number.missions_speed": ("speed", "m/s", None, None),
     "sensor.missions_odometer": ("distance", "m", None, "measurement"),
     "switch.missions_blocked": (None, None, None, None),
+    # a mission: its last run's status, the run as attributes
+    "sensor.missions_drive": (None, None, None, None),
+    # examples/Thermostat: its own channels, then the hub channels MQTT backs (docs/MQTT.md "Hub channels")
+    "sensor.thermostat_temperature": ("temperature", "°C", None, "measurement"),
+    "binary_sensor.thermostat_heating": (None, None, None, None),
+    "sensor.thermostat_setpoints": (None, None, "diagnostic", "total_increasing"),
+    "sensor.thermostat_reports": (None, None, "diagnostic", "total_increasing"),
+    "sensor.thermostat_alarms": (None, None, "diagnostic", "total_increasing"),
+    "sensor.thermostat_modes": (None, None, "diagnostic", "total_increasing"),
+    "sensor.thermostat_failures": (None, None, "diagnostic", "total_increasing"),
+    "sensor.thermostat_last_failure": (None, None, "diagnostic", "total_increasing"),
+    "number.thermostat_hub_setpoint": ("temperature", "°C", None, None),
+    "sensor.thermostat_hub_report": (None, None, None, "measurement"),
+    "event.thermostat_hub_alarm": (None, None, None, None),
+    "number.thermostat_hub_mode": (None, None, None, None),
 }
-
-
-class Rig:
-    def __init__(self, ha: HomeAssistant, broker: Broker, serve: Serve, emus: Dict[str, Emulator]) -> None:
-        self.ha, self.broker, self.serve, self.emus = ha, broker, serve, emus
-
-    def mqtt_one(self, topic: str, action: Any) -> str:
-        """The next message on ``topic`` after ``action()`` (mosquitto's own client, which is
-        known to be subscribed once a probe of ours reached it)."""
-        probe = f"test/probe/{os.getpid()}"
-        sub = subprocess.Popen(["mosquitto_sub", "-h", "127.0.0.1", "-p", str(self.broker.port), "-v",
-                                "-t", topic, "-t", probe], stdout=subprocess.PIPE, bufsize=0)
-        assert sub.stdout is not None
-        fd, buf = sub.stdout.fileno(), b""
-
-        def until(pred: Any, what: str) -> str:
-            nonlocal buf
-            deadline = time.monotonic() + STATE_S
-            while True:
-                lines = buf.decode(errors="replace").splitlines()
-                hit = next((ln for ln in lines if pred(ln)), None)
-                if hit is not None:
-                    return hit
-                assert time.monotonic() < deadline, f"timed out waiting for {what}"
-                if select.select([fd], [], [], 0.5)[0]:
-                    buf += os.read(fd, 65536)
-                elif what == "the probe":
-                    self.publish(probe, "x")
-        try:
-            until(lambda ln: ln.startswith(probe + " "), "the probe")
-            buf = b""
-            action()
-            return until(lambda ln: ln.startswith(topic + " "), topic)[len(topic) + 1:].strip()
-        finally:
-            sub.kill()
-            sub.wait()
-
-    def publish(self, topic: str, payload: str) -> None:
-        subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(self.broker.port), "-q", "1",
-                        "-t", topic, "-m", payload], check=True, timeout=30)
-
-
-@pytest.fixture(scope="module")
-def rig(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Rig]:
-    if MOSQUITTO is None:
-        pytest.fail("mosquitto is not installed: run tools/setup.sh", pytrace=False)
-    tmp = tmp_path_factory.mktemp("ha")
-    venv = setup_ha()
-    (tmp / "broker").mkdir()
-    broker = Broker(MOSQUITTO, str(tmp / "broker"), False)
-    broker.start()
-    ha = HomeAssistant(venv, str(tmp / "config"))
-    emus: Dict[str, Emulator] = {}
-    serve: Optional[Serve] = None
-    try:
-        ha.start()
-        ha.onboard()
-        ha.add_mqtt(broker.port)
-        boards = tmp / "boards"
-        boards.mkdir()
-        bin_dir = os.path.dirname(emulator_binary())
-        for name, binary in EMULATORS.items():
-            emus[name] = Emulator(os.path.join(bin_dir, binary), str(boards / name))
-            emus[name].start()
-        sock = str(tmp / "run" / "hubwire.sock")
-        (tmp / "cache").mkdir()
-        env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(tmp / "cache"),
-                   PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-        serve = Serve(str(boards), sock, env, str(tmp / "serve.log"),
-                      ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", "test"])
-        serve.start()
-        yield Rig(ha, broker, serve, emus)
-    finally:
-        if serve is not None:
-            serve.stop()
-        for e in emus.values():
-            if e.proc is not None:
-                e.stop()
-        ha.stop()
-        broker.stop()
+#: the devices as Home Assistant names them (a board's hub channels join its device)
+DEVICES = {"Rover", "Actions", "Large", "Large1k", "Missions", "Thermostat"}
 
 
 def test_every_entity_is_registered_with_its_platform_class_unit_and_category(rig: Rig) -> None:
@@ -167,9 +99,12 @@ def test_every_entity_is_registered_with_its_platform_class_unit_and_category(ri
         got = (attrs.get("device_class"), attrs.get("unit_of_measurement"), reg[eid]["entity_category"],
                attrs.get("state_class"))
         assert got == (cls, unit, category, state_class), eid
-    # one device per board
+    # one device per board, named as the board (its hub channels' entities in it too)
     devices = {reg[e]["device_id"] for e in reg}
-    assert len(devices) == len(EMULATORS)
+    assert len(devices) == len(DEVICES)
+    names = {d["id"]: d["name"] for d in ha.devices()}
+    assert {names[d] for d in devices} == DEVICES
+    assert reg["number.thermostat_hub_setpoint"]["device_id"] == reg["sensor.thermostat_temperature"]["device_id"]
     # states the boards start with, as HA shows them (a value read from the board: no entity
     # waits for a first command to have one)
     ha.wait_state("sensor.rover_battery", lambda s: s["state"].isdigit() and 6000 < int(s["state"]) <= 7400,
@@ -247,6 +182,88 @@ def test_a_nan_reading_shows_unknown_not_the_last_number(rig: Rig) -> None:
     ha.wait_state("sensor.missions_odometer", lambda s: s["state"] == "2.5", "a number again")
 
 
+def test_the_thermostat_takes_its_setpoint_and_mode_from_home_assistant(rig: Rig) -> None:
+    """Its hub channels through HA: the setpoint (a value the board reads) and the mode (an event it
+    hears) set with number.set_value, its report (a value it writes) a sensor, its alarm (a hub
+    action it calls) an event entity. What the board did is read from its own channels."""
+    ha = rig.ha
+    # no setpoint yet: the board waits for one (HA shows no invented value)
+    ha.wait_state("number.thermostat_hub_setpoint", lambda s: s["state"] == "unknown", "no setpoint yet")
+    ha.call("number", "set_value", entity_id="number.thermostat_hub_setpoint", value=30)
+    ha.wait_state("number.thermostat_hub_setpoint", lambda s: s["state"] == "30.0", "30 on the value topic")
+    ha.wait_state("sensor.thermostat_setpoints", lambda s: s["state"].isdigit() and int(s["state"]) >= 2,
+                  "the board reading the setpoint")
+    ha.call("number", "set_value", entity_id="number.thermostat_hub_mode", value=1)
+    ha.wait_state("number.thermostat_hub_mode", lambda s: s["state"] == "1", "the mode sent")
+    ha.wait_state("sensor.thermostat_modes", lambda s: s["state"] == "1", "the mode event taken")
+    ha.wait_state("binary_sensor.thermostat_heating", lambda s: s["state"] == "on", "heating toward 30")
+    report = ha.wait_state("sensor.thermostat_hub_report", lambda s: s["state"].isdigit(), "a report")
+    assert 150 <= int(report["state"]) <= 400  # tenths of a degree
+    # a setpoint far below the temperature: heating stops, and the board calls the alarm
+    alarms = ha.state_changes("event.thermostat_hub_alarm", lambda: ha.call(
+        "number", "set_value", entity_id="number.thermostat_hub_setpoint", value=5), lambda got: len(got) >= 1)
+    assert alarms[0]["attributes"]["event_type"] == "alarm" and alarms[0]["attributes"]["arg"] > 10, alarms[0]
+    ha.wait_state("binary_sensor.thermostat_heating", lambda s: s["state"] == "off", "heating off below 5")
+    ha.wait_state("sensor.thermostat_alarms", lambda s: s["state"].isdigit() and int(s["state"]) >= 1,
+                  "the alarm answered true")
+    assert ha.state("sensor.thermostat_modes")["state"] == "1"  # type: ignore[index]  # the event once
+    # no request refused; one may time out (240: kHubTimeout) on a loaded machine
+    assert ha.state("sensor.thermostat_last_failure")["state"] in ("0", "240")  # type: ignore[index]
+
+
+def test_a_mission_started_from_home_assistant_ends_with_one_result(rig: Rig) -> None:
+    """As docs/MQTT.md "Missions" offers it to an automation: mqtt.publish on the start topic, a
+    retry with the same run id starting nothing; the mission's sensor shows the last run."""
+    ha = rig.ha
+    topic = "hubwire/missions/mission/drive/start"
+
+    def start(run_id: str) -> None:
+        ha.call("mqtt", "publish", topic=topic, qos=1, payload=json.dumps({"run_id": run_id, "goal": 0.5}))
+
+    def runs() -> None:
+        start("ha-1")
+        start("ha-1")  # the automation retried: nothing new
+        # the drive refuses a start while it runs (BUSY): the next one once HA shows this one ended
+        ha.wait_state("sensor.missions_drive", lambda s: s["attributes"].get("run_id") == "ha-1"
+                      and s["state"] not in ("running", "unknown", "unavailable"), "ha-1 ended")
+        start("ha-1")  # a late retry of a run that ended: nothing either (else ha-2 would be BUSY)
+        start("ha-2")
+    got = [json.loads(p) for p in rig.mqtt_until(
+        "hubwire/missions/mission/drive/result", runs, lambda got: any('"ha-2"' in p for p in got))]
+    first = [r for r in got if r["run_id"] == "ha-1"]
+    assert len(first) == 1 and first[0]["status"] == "succeeded", got
+    assert abs(first[0]["value"] - 0.5) < 0.2, first
+    second = next(r for r in got if r["run_id"] == "ha-2")
+    assert second["status"] == "succeeded" and second["run"] == first[0]["run"] + 1, got
+    drive = ha.wait_state("sensor.missions_drive", lambda s: s["attributes"].get("run_id") == "ha-2"
+                          and s["state"] == "succeeded", "the last run succeeded")
+    assert drive["attributes"]["run"] == second["run"] and abs(drive["attributes"]["value"] - 0.5) < 0.2, drive
+
+
+def test_a_start_refused_while_a_run_goes_leaves_the_run_on_the_sensor_and_a_cancel_ends_it(rig: Rig) -> None:
+    ha = rig.ha
+    base = "hubwire/missions/mission/drive"
+    ha.call("number", "set_value", entity_id="number.missions_speed", value=0.2)  # 10 m: 50 s
+    ha.wait_state("number.missions_speed", lambda s: s["state"] == "0.2", "0.2 read back")
+    ha.call("mqtt", "publish", topic=f"{base}/start", qos=1, payload='{"run_id": "ha-3", "goal": 10}')
+    going = ha.wait_state("sensor.missions_drive", lambda s: s["attributes"].get("run_id") == "ha-3"
+                          and s["state"] == "running" and s["attributes"].get("progress"), "ha-3 driving")
+    progress = going["attributes"]["progress"]
+    # an f32 as the board has it (0.45, not the double 0.4500000178813934 it reads back as)
+    assert 0 < progress < 10 and progress == f32_shortest(progress), going
+
+    def busy_then_cancel() -> None:
+        refused = json.loads(rig.mqtt_one(f"{base}/result", lambda: ha.call(
+            "mqtt", "publish", topic=f"{base}/start", qos=1, payload='{"run_id": "ha-4", "goal": 1}')))
+        assert (refused["run_id"], refused["status"], refused.get("nak")) == ("ha-4", "refused", "BUSY"), refused
+        ha.call("mqtt", "publish", topic=f"{base}/cancel", qos=1, payload='{"run_id": "ha-3"}')
+    changes = ha.state_changes("sensor.missions_drive", busy_then_cancel,
+                               lambda got: any(s["state"] == "cancelled" for s in got))
+    # the refused start did not replace the run that went on: the sensor followed ha-3 to its end
+    shown = [(s["state"], s["attributes"].get("run_id")) for s in changes]
+    assert all(rid == "ha-3" for _, rid in shown) and shown[-1] == ("cancelled", "ha-3"), shown
+
+
 def test_the_rover_on_its_device_page(rig: Rig) -> None:
     if sys.version_info < (3, 10) or not os.path.exists("/usr/bin/chromium"):
         pytest.skip("chromium and Playwright (Python 3.10+) take the screenshot")
@@ -268,8 +285,17 @@ def test_availability_on_unplug_and_on_a_clean_stop(rig: Rig) -> None:
     rig.emus["rover"].kill()  # unplugged: the board's status goes offline
     ha.wait_state("sensor.rover_battery", lambda s: s["state"] == "unavailable", "unavailable on unplug")
     ha.wait_state("number.actions_blink", lambda s: s["state"] != "unavailable", "other boards available")
+    # the Thermostat unplugged: what the board writes and calls goes with it; the hub's own values
+    # stay (a setpoint or a mode set now is the board's once it is back)
+    rig.uno.stop()
+    for eid in ("sensor.thermostat_temperature", "sensor.thermostat_hub_report", "event.thermostat_hub_alarm"):
+        ha.wait_state(eid, lambda s: s["state"] == "unavailable", "unavailable on unplug")
+    for eid, state in (("number.thermostat_hub_setpoint", "5.0"), ("number.thermostat_hub_mode", "1")):
+        got = ha.state(eid)
+        assert got is not None and got["state"] == state, got
     assert rig.serve.stop() == 0  # a clean stop: the service's status goes offline
-    for eid in ("sensor.actions_calls", "number.missions_speed", "sensor.large_path", "button.actions_uptime"):
+    for eid in ("sensor.actions_calls", "number.missions_speed", "sensor.large_path", "button.actions_uptime",
+                "number.thermostat_hub_setpoint", "sensor.missions_drive"):
         ha.wait_state(eid, lambda s: s["state"] == "unavailable", "unavailable on a clean stop")
 
 
@@ -290,8 +316,8 @@ def test_every_unit_mapping_is_one_home_assistant_accepts() -> None:
 
 
 #: a log line about Hubwire: one of its topics, devices or entities
-HUBWIRE = re.compile(r"hubwire|homeassistant/[a-z_]+/(rover|actions|large|large1k|missions)/|"
-                     r"\.(rover|actions|large|large1k|missions)_", re.I)
+HUBWIRE = re.compile(r"hubwire|homeassistant/[a-z_]+/(rover|actions|large|large1k|missions|thermostat)/|"
+                     r"\.(rover|actions|large|large1k|missions|thermostat)_", re.I)
 
 
 def test_home_assistant_logged_nothing_about_hubwire(rig: Rig) -> None:

@@ -18,6 +18,7 @@ from service.conftest import HOST, Serve, wait_for
 from simuno.conftest import Simuno, example_elf, simuno_binary
 
 from .conftest import Broker
+from .helpers import f32_shortest
 
 MISSIONS_EMULATOR = os.path.join(HOST, "..", "build", "emulator", "hubwire-missions-emulator")
 DEADLINE = 60.0
@@ -92,6 +93,8 @@ def test_goal_progress_result_busy_and_cancel_over_mqtt(served: Tuple[Serve, Bro
     assert [p["index"] for p in progress] == list(range(len(progress))) and progress
     values = [p["value"] for p in progress]
     assert values == sorted(set(values)) and all(0 < v < 1.0 for v in values) and {p["run"] for p in progress} == {1}
+    # f32 progress as its shortest decimal (0.45, not the double 0.4500000178813934 it reads back as)
+    assert all(v == f32_shortest(v) for v in values), values
 
     # the same start again (a QoS 1 redelivery, a flow retrying) starts nothing
     pub(broker, f"{BASE}/start", '{"run_id": "nr-1", "goal": 1.0}')
@@ -119,6 +122,9 @@ def test_goal_progress_result_busy_and_cancel_over_mqtt(served: Tuple[Serve, Bro
     assert (r3["status"], r3["error"], r3["nak"], r3["run"]) == ("refused", "Nak", "BUSY", None)
     pub(broker, f"{BASE}/cancel", '{"run_id": "nr-2"}')
     wait_for(lambda: results(log, "nr-2"), DEADLINE, "nr-2 cancelled")
+    # the refused start did not take the retained state from the run that went on
+    assert [st["run_id"] for st in on(log, f"{BASE}/state") if st["run_id"] in ("nr-2", "nr-3")][-1:] == ["nr-2"]
+    assert not [st for st in on(log, f"{BASE}/state") if st["run_id"] == "nr-3"]
     assert results(log, "nr-2") == [{"run_id": "nr-2", "run": 2, "status": "cancelled", "error": "MissionCancelled",
                                      "message": "mission 'drive' run 2 was cancelled"}]
     # a start without run id: the bridge names the run; the retained state shows the latest run

@@ -90,7 +90,7 @@ def test_the_thermostat_runs_on_hub_channels_from_mqtt(thermostat_served: Serve,
         setpoint_cfg = json.loads(topic("homeassistant/number/thermostat/hub-setpoint/config")[-1])
         assert setpoint_cfg["command_topic"] == "hubwire/thermostat/hub/setpoint/set"
         assert setpoint_cfg["state_topic"] == "hubwire/thermostat/hub/setpoint"
-        assert setpoint_cfg["unit_of_measurement"] == "C"
+        assert (setpoint_cfg["unit_of_measurement"], setpoint_cfg["device_class"]) == ("°C", "temperature")
 
         # the setpoint from MQTT: the board binds, reads it, and heats toward it once mode is 1
         pub("hubwire/thermostat/hub/setpoint/set", "25")

@@ -117,7 +117,7 @@ def test_home_assistant_gets_a_number_a_sensor_an_event_and_a_number_for_the_mod
 
     setpoint = json.loads(msgs["homeassistant/number/thermostat/hub-setpoint/config"])
     assert setpoint["command_topic"] == "hubwire/thermostat/hub/setpoint/set"
-    assert setpoint["unique_id"] == "hubwire_thermostat--hub-setpoint" and setpoint["unit_of_measurement"] == "C"
+    assert setpoint["unique_id"] == "hubwire_thermostat--hub-setpoint" and setpoint["unit_of_measurement"] == "°C"
     assert json.loads(msgs["homeassistant/sensor/thermostat/hub-report/config"])["state_topic"] == \
         "hubwire/thermostat/hub/report"
     assert json.loads(msgs["homeassistant/event/thermostat/hub-alarm/config"])["event_types"] == ["alarm"]
