@@ -199,7 +199,7 @@ def test_hub_events_after_kill9_and_a_board_reboot(serve: Serve, soak: Emulator)
     wait_for(lambda: c.request("read", board="soak", channel="tick_last")["value"] >= n // 5, 30, "ticks flowing")
     kill9(serve)
     c.close()
-    with hubwire.connect(transport=SerialTransport(soak.link), timeout=10) as d:  # (no service now)
+    with hubwire.connect(transport=SerialTransport(soak.link), timeout=10, hub_later=True) as d:  # (no service now)
         before = int(d.read("tick_last"))  # the last one applied: the next one was in flight, or not sent
     soak.stop()
     soak.start()  # its counters start again from 0
