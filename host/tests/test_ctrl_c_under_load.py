@@ -88,8 +88,10 @@ def test_serve_ends_within_the_promise(burners: Any, emulator: Emulator, tmp_pat
 
 def test_a_clean_ending_that_hangs_is_cut_short(burners: Any) -> None:
     """Whatever the command does after Ctrl-C (here: nothing but wait), the process ends in time."""
-    code = ("import sys, time; from hubwire.cli import interrupt; interrupt.install(130); print('ready', flush=True)\n"
-            "try:\n    time.sleep(60)\nexcept KeyboardInterrupt:\n    time.sleep(60)  # a close that never ends\n")
+    # 'ready' inside the try: a signal between the print and the try would end Python uncaught (-2)
+    code = ("import sys, time; from hubwire.cli import interrupt; interrupt.install(130)\n"
+            "try:\n    print('ready', flush=True)\n    time.sleep(60)\n"
+            "except KeyboardInterrupt:\n    time.sleep(60)  # a close that never ends\n")
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
     assert p.stdout is not None and p.stdout.readline() == "ready\n"
     sent = time.monotonic()
