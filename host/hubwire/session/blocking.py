@@ -13,10 +13,11 @@ import time
 from contextlib import contextmanager
 from typing import Any, Iterator, Optional
 
-from ..errors import NakError, Timeout
+from ..errors import NakError
 from ..wire import messages as m
 from ..wire.frame import Frame
 from .pending import GateCounts, Pending
+from .transactions import no_seq
 
 __all__ = ["ThreadGate", "transact", "wait_ready"]
 
@@ -112,7 +113,7 @@ def _register_later(core: Any, type: int, id: int, payload: bytes, retry: float,
         tx.wait_turn_thread()
         p = tx.try_register(type, id, payload, threaded=True, slot=True, granted=True)
         if p is None:
-            raise Timeout(f"no sequence number free for a control{' of ' + what if what else ''} on {core.url}")
+            raise no_seq(type, what, core.url)
     return p
 
 

@@ -232,6 +232,8 @@ class Link:
         # a lone 00 first ends whatever noise the device may have collected (an empty frame is
         # ignored by the receiver, PROTOCOL.md 1), so this hello is not lost with it
         self.send(b"\x00" + encode_frame(m.HELLO, 0, 0, h.pack()))
+        if not reply:
+            self.owner.tx.hello_sent()  # its answer shows what the device has answered (session/seqs.py)
 
     def _hello_tick(self) -> None:
         """Say hello now and every HELLO_INTERVAL until linked (or the port is gone)."""
@@ -363,6 +365,8 @@ class Link:
                 self._announce_pending = True
                 return None
             self.send_hello(reply=True)
+        else:
+            self.owner.tx.hello_answered()
         announced, self._announce_pending = not h.is_reply or self._announce_pending, False
         prev, was_linked = self.device_hello, self.linked
         self.device_hello = h

@@ -12,7 +12,8 @@ counting alone does not prevent it; :class:`SeqRules` skips:
   ``R``, ``J`` or ``S`` drawn after they ended (anything but NAK ``NOT_LINKED``) proves the device
   has handled another transaction since;
 - for a ``!``: the seq of the last event acknowledged and of the previous event;
-- for every kind: a (seq, id) still in flight (``busy``), so an answer never meets the wrong message.
+- for every kind: a (seq, id) still in flight (``busy``), and one whose answer may still come
+  (:class:`Unanswered`), so an answer never meets the wrong message.
 
 A rebooted device remembers nothing: both sets are emptied. A hub that resumes its session after
 its own restart (:mod:`.resume`) starts with both filled from what it stored.
@@ -21,11 +22,77 @@ Not thread-safe: the caller holds its lock (:class:`.transactions.Transactions`)
 """
 from __future__ import annotations
 
-from typing import Callable, Dict, Optional, Set
+from collections import deque
+from typing import Callable, Deque, Dict, Optional, Set, Tuple
 
 from ..wire import messages as m
 
-__all__ = ["SeqRules"]
+__all__ = ["SeqRules", "Unanswered"]
+
+Key = Tuple[int, int]
+
+
+class Unanswered:
+    """The (seq, id) of hub messages whose answer may still come (PROTOCOL.md 4.1 rule 3).
+
+    A message the hub gave up on (a timeout, a read retried under a new seq) may be answered much
+    later: a device blocked in its ``loop()`` answers what sits in its receive buffer when it runs
+    again, however many seqs the hub drew meanwhile. The line keeps order and the device answers in
+    the order it receives, so an answer to a message means that everything sent before that message
+    was answered or lost. Each (seq, id) is kept from its draw until an answer arrives to a message
+    drawn after it ended (or the device's hello answers a hub hello sent after it ended); until then
+    no new message takes it. At most one entry per (seq, id): 65,536, reached only by a device that
+    answers nothing while the hub keeps drawing; a channel whose 256 seqs are all kept gets no new
+    message (the caller probes the device) until an answer comes.
+    """
+
+    def __init__(self) -> None:
+        #: a clock of draws and ends: orders them against each other
+        self.tick = 0
+        #: (seq, id) -> tick it was drawn at
+        self.drawn: Dict[Key, int] = {}
+        #: (tick it ended, key), in the order they ended: what an answer may forget
+        self._ended: Deque[Tuple[int, Key]] = deque()
+        self._done: Set[Key] = set()  # keys in _ended (ended once per draw)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.drawn
+
+    def __len__(self) -> int:
+        return len(self.drawn)
+
+    def now(self) -> int:
+        self.tick += 1
+        return self.tick
+
+    def add(self, key: Key) -> None:
+        self.drawn[key] = self.now()
+
+    def ended(self, key: Key) -> None:
+        """No copy of ``key`` is sent any more (answered, given up, or sent under a new seq)."""
+        if key in self.drawn and key not in self._done:
+            self._done.add(key)
+            self._ended.append((self.now(), key))
+
+    def answered(self, key: Key) -> None:
+        """An answer to ``key`` arrived: everything that ended before it was drawn has had its answer."""
+        at = self.drawn.get(key)
+        if at is not None:
+            self.answered_through(at)
+
+    def answered_through(self, tick: int) -> None:
+        """Every message that ended before ``tick`` has been answered or lost."""
+        while self._ended and self._ended[0][0] < tick:
+            _, key = self._ended.popleft()
+            self._done.discard(key)
+            del self.drawn[key]
+
+    def forget_ended(self) -> None:
+        """A rebooted device answers nothing it received before: only what is still in flight stays."""
+        for _, key in self._ended:
+            del self.drawn[key]
+        self._ended.clear()
+        self._done.clear()
 
 
 class SeqRules:
@@ -40,6 +107,8 @@ class SeqRules:
         #: seqs of the last hub event acknowledged and of the last one ended (10.3)
         self.events: Set[int] = set()
         self._acked: Optional[int] = None
+        #: (seq, id) whose answer may still come: skipped for every kind
+        self.unanswered = Unanswered()
 
     def draw(self, type: int, id: int, busy: Callable[[int, int], bool]) -> Optional[int]:
         """The next free seq for a new ``type`` message to ``id``; None when all 256 are taken."""
@@ -48,9 +117,10 @@ class SeqRules:
         seq = self.seq
         for _ in range(256):
             seq = (seq + 1) & 0xFF
-            if seq not in avoid and not busy(seq, id):
+            if seq not in avoid and not busy(seq, id) and (seq, id) not in self.unanswered:
                 self.seq = seq
                 self.draws += 1
+                self.unanswered.add((seq, id))
                 return seq
         return None
 
@@ -84,6 +154,7 @@ class SeqRules:
 
     def device_rebooted(self) -> None:
         """A new device session remembers nothing of the hub's frames."""
+        self.unanswered.forget_ended()
         self.controls = {}
         self.events = set()
         self._acked = None

@@ -37,6 +37,15 @@ DEFAULT_BAUD = 115200
 _NOT_LINKED = bytes((NakCode.NOT_LINKED,))
 
 
+def no_seq(type: int, what: str, url: str) -> Timeout:
+    """No seq free for a new message even after the board-id read (session/seqs.py)."""
+    of = f" of {what}" if what else ""
+    if type == m.CONTROL:
+        return Timeout(f"no sequence number free for a control{of} on {url}")
+    return Timeout(f"no sequence number free{of} on {url}: the device has not answered any of the last "
+                   f"256 messages to this channel, nor anything sent after them (a blocked loop()?)")
+
+
 class Transactions:
     """Pending transactions of one session. ``core`` provides ``link``, ``stats``, ``url``,
     ``retry_timeout``, ``tries``, ``connect_timeout``, ``max_in_flight`` and ``check_ready(timeout)``."""
@@ -53,6 +62,8 @@ class Transactions:
         self.slots = Slots(getattr(core, "max_in_flight", DEFAULT_MAX_IN_FLIGHT))
         #: who has a C outstanding: "user" (the application) or "hub" (the bind report), see claim_control
         self.control_owner: Optional[str] = None
+        #: when the first hub hello not yet answered went out (SeqRules.unanswered's clock)
+        self._hello_at: Optional[int] = None
 
     # -------------------------------------------------------------------------------- seqs
 
@@ -63,6 +74,8 @@ class Transactions:
         """A seq for a message nobody waits an answer for (a subscription cancelled at close)."""
         with self.lock:
             seq = self.rules.draw(type, id, self._busy)
+            if seq is not None:
+                self.rules.unanswered.ended((seq, id))  # sent once, now
         return self.rules.seq if seq is None else seq
 
     def hold(self, type: int, id: int) -> Optional[int]:
@@ -79,6 +92,9 @@ class Transactions:
         with self.lock:
             type = self.held.pop((seq, id), None)
             acked = answer is not None and answer.type == m.ACK
+            self.rules.unanswered.ended((seq, id))
+            if answer is not None:
+                self.rules.unanswered.answered((seq, id))
             if type == m.CONTROL:
                 self.rules.control_answered(seq) if acked else self.rules.control_ended(seq)
             elif type == m.EVENT and answer is not None:
@@ -95,6 +111,21 @@ class Transactions:
             self.rules.resumed(acked, None if head is None else head[0])
             if head is not None:
                 self.held[head] = m.EVENT
+                self.rules.unanswered.add(head)
+
+    def hello_sent(self) -> None:
+        """A hub hello asking for the device's went out (:meth:`hello_answered`)."""
+        with self.lock:
+            if self._hello_at is None:
+                self._hello_at = self.rules.unanswered.now()
+
+    def hello_answered(self) -> None:
+        """The device's hello answered one of ours: it answers in order, so every answer to what was
+        sent before our first unanswered hello has come (or never will)."""
+        with self.lock:
+            if self._hello_at is not None:
+                self.rules.unanswered.answered_through(self._hello_at)
+                self._hello_at = None
 
     # ----------------------------------------------------------------------- control right
 
@@ -152,6 +183,7 @@ class Transactions:
         with self.lock:
             if self.pending.get((p.seq, p.id)) is p:
                 del self.pending[(p.seq, p.id)]
+                self.rules.unanswered.ended((p.seq, p.id))
                 if p.type == m.CONTROL and not p.acked:
                     self.rules.control_ended(p.seq)
                 if p.slot:
@@ -170,6 +202,7 @@ class Transactions:
                 return
             old = p.seq
             del self.pending[(old, p.id)]
+            self.rules.unanswered.ended((old, p.id))
             p.seq, p.drawn = seq, self.rules.draws
             p.wire = self.core.link.encode(p.type, seq, p.id, p.payload)
             self.pending[(seq, p.id)] = p
@@ -272,6 +305,7 @@ class Transactions:
         """Route an ACK/NAK/r/J to its transaction; False if nobody waits for it."""
         with self.lock:
             p = self.pending.get((f.seq, f.id))
+            self.rules.unanswered.answered((f.seq, f.id))
             if p is None or p.done():
                 self.core.stats.unmatched_answers += 1
                 return False
@@ -336,8 +370,7 @@ class Transactions:
             await self.wait_turn()
             p = self.try_register(type, id, payload, slot=True, granted=True)
             if p is None:
-                raise Timeout(f"no sequence number free for a control{' of ' + what if what else ''} "
-                              f"on {self.core.url}")
+                raise no_seq(type, what, self.core.url)
         return p
 
     async def transact_probe(self, retry: float, what: str) -> None:
