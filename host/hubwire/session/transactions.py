@@ -199,6 +199,8 @@ class Transactions:
         with self.lock:
             seq = self.rules.draw(p.type, p.id, self._busy)
             if seq is None or self.pending.get((p.seq, p.id)) is not p:
+                if seq is not None:
+                    self.rules.unanswered.ended((seq, p.id))  # drawn, never sent
                 return
             old = p.seq
             del self.pending[(old, p.id)]
