@@ -8,7 +8,7 @@
 # one or all under one folder; a peer whose folder is not given is skipped.
 #
 #   bash bench/peers.sh [--sources DIR] [--packetserial DIR] [--serialtransfer DIR] [--telemetrix DIR]
-#                       [--rosserial DIR] [--firmata DIR --servo DIR] [--markdown]
+#                       [--rosserial DIR] [--firmata DIR --servo DIR] [--markdown] [--check]
 #
 #   --sources DIR: DIR/PacketSerial, DIR/SerialTransfer, DIR/Telemetrix4Arduino,
 #           DIR/rosserial_arduino_lib, DIR/arduino (Firmata), DIR/Servo, each where it exists (what
@@ -26,10 +26,13 @@
 # over extras/bench/SerialEcho, and the heap taken at start (bench/heap.c: malloc's break after 2 s
 # in simavr; "none" when malloc is not linked). --markdown prints the rows as a Markdown table;
 # either way the table goes to bench/PEERS.md as well (bench/report.py puts it into RESULTS.md).
+# --check: then run bench/peers_check.py, which drives each sketch of Minimal's shape on the
+# simulated Uno (make simuno) to see that it does what extras/bench/peers/README.md says.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 declare -A DIR=()
 MD=0
+CHECK=0
 while [ $# -gt 0 ]; do
   case $1 in
     --packetserial|--serialtransfer|--telemetrix|--rosserial|--firmata|--servo)
@@ -43,6 +46,7 @@ while [ $# -gt 0 ]; do
         [ -d "$src/${pair#*:}" ] && DIR[${pair%%:*}]=$src/${pair#*:}
       done ;;
     --markdown) MD=1; shift ;;
+    --check) CHECK=1; shift ;;
     *) echo "peers: unknown option $1 (see the header of $0)" >&2; exit 2 ;;
   esac
 done
@@ -182,4 +186,7 @@ else
   printf '%-20s %-56s %6s %5s %5s %7s %6s\n' library sketch flash SRAM heap +flash +SRAM
   printf '%-20s %-56s %6s %5s %5s\n' baseline extras/bench/SerialEcho "$bf" "$bs" "$bh"
   for r in "${rows[@]}"; do IFS='|' read -r a b c d e g h <<<"$r"; printf '%-20s %-56s %6s %5s %5s %7s %6s\n' "$a" "$b" "$c" "$d" "$e" "$g" "$h"; done
+fi
+if [ $CHECK = 1 ]; then
+  .venv/bin/python bench/peers_check.py "$OUT" "${BUILD:-build}/simuno/simuno"
 fi

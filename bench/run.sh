@@ -36,7 +36,7 @@ rm -rf build/bench/results
 step footprint bash bench/footprint.sh
 # The peers' sources are not in this repository (bench/peers.sh): PEERS_SRC names a folder of them.
 if [ -n "${PEERS_SRC:-}" ]; then
-	step peers bash bench/peers.sh --sources "$PEERS_SRC"
+	step peers bash bench/peers.sh --sources "$PEERS_SRC" --check
 else
 	echo "== bench: peers skipped (PEERS_SRC not set): bench/PEERS.md kept from its last run" >&2
 fi

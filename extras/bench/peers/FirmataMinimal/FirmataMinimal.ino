@@ -2,9 +2,10 @@
 // (SimpleDigitalFirmata, EchoString) would have it; built by bench/peers.sh for the like-for-like
 // rows of bench/PEERS.md.
 //
-//   blink_ms  a user-defined sysex command (0x01; Firmata keeps 0x00..0x0F for them), 7-bit bytes:
-//             no argument reads, two (lsb, msb) write; answered by sysex 0x01 [ok, lsb, msb] with
-//             blink_ms now (ok 0: the write was out of 50..5000, or malformed)
+//   blink_ms  a user-defined sysex command (0x01; Firmata keeps 0x00..0x0F for them): empty, it
+//             reads; with blink_ms (two bytes, low first), it writes. Answered by sysex 0x01
+//             [ok, low, high] with blink_ms now (ok 0: the write was out of 50..5000, or malformed).
+//             Every byte after the command travels as two 7-bit bytes, as sendSysex() sends them.
 //   led       the standard digital message: writing pin 13 (LED_BUILTIN) switches the blinking
 //             (no answer: Firmata does not answer a digital write)
 //   button    the standard digital report of port 0 whenever pin 2 changes (pressed reads 0)
@@ -20,14 +21,14 @@ void sysexCallback(byte command, byte argc, byte *argv)
   if (command != BLINK_MS)
     return;
   byte ok = argc == 0;
-  if (argc == 2) {
-    uint16_t ms = argv[0] | (argv[1] << 7);
+  if (argc == 4) {
+    uint16_t ms = word(argv[2] | argv[3] << 7, argv[0] | argv[1] << 7);
     if (ms >= 50 && ms <= 5000) {
       blinkMs = ms;
       ok = 1;
     }
   }
-  byte answer[] = {ok, byte(blinkMs & 0x7F), byte(blinkMs >> 7)};
+  byte answer[] = {ok, lowByte(blinkMs), highByte(blinkMs)};
   Firmata.sendSysex(BLINK_MS, sizeof(answer), answer);
 }
 
