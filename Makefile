@@ -111,7 +111,8 @@ dashboard-demo: setup simuno $(BUILD)/uno/Rover/Rover.ino.elf
 	@HUBWIRE_BUILD=$(BUILD) bash tools/demo.sh --dashboard
 
 # Every benchmark row (footprint, AVR cycles, wire bytes, hub throughput, connect time, round
-# trips, many devices) into bench/RESULTS.md.
+# trips, many devices) into bench/RESULTS.md. PEERS_SRC=DIR (the peers' sources, see
+# bench/peers.sh) also rebuilds the peers table, bench/PEERS.md; without it that table is kept.
 bench: setup emulator simuno uno-firmware
 	bash bench/run.sh
 

@@ -68,7 +68,8 @@ def misses() -> str:
 
 def measured_apart() -> str:
     """Tables measured by scripts that need folders from outside the repository (peers' sources,
-    vendor cores), kept from their last run: bench/PEERS.md and bench/REALCORES.md."""
+    vendor cores), kept from their last run: bench/PEERS.md (run.sh rebuilds it first when PEERS_SRC
+    names the peers' sources) and bench/REALCORES.md."""
     out = ""
     for name, title in (("PEERS.md", "Peers"), ("REALCORES.md", "Real Arduino cores")):
         path = os.path.join(ROOT, "bench", name)

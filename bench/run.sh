@@ -5,6 +5,7 @@
 #
 # Needs what `make setup` installs, plus a bench-only venv (build/bench-venv) holding pymavlink and
 # pySerialTransfer from PyPI for the comparison in row 4: created here on first use, never .venv.
+# PEERS_SRC=DIR: the peers' sources, for bench/peers.sh (bench/PEERS.md); without it that table is kept.
 # Takes about 5 minutes (the dashboard row: about 1.5). A step that fails is reported as failed in RESULTS.md; the rest still run.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -33,6 +34,12 @@ mkdir -p build/bench
 rm -rf build/bench/results
 
 step footprint bash bench/footprint.sh
+# The peers' sources are not in this repository (bench/peers.sh): PEERS_SRC names a folder of them.
+if [ -n "${PEERS_SRC:-}" ]; then
+	step peers bash bench/peers.sh --sources "$PEERS_SRC" --check
+else
+	echo "== bench: peers skipped (PEERS_SRC not set): bench/PEERS.md kept from its last run" >&2
+fi
 step descriptor_compile bash bench/descriptor-compile.sh
 step rx_cycles "$PY" bench/rx_cycles.py
 step wire_bytes "$PY" bench/wire_bytes.py
