@@ -11,7 +11,7 @@ import pytest
 import hubwire
 from hubwire import MissionCancelled, NakError
 from hubwire.wire.messages import NakCode
-from simuno.conftest import Simuno, example_elf, simuno_binary
+from simuno.conftest import Simuno, start_example
 
 from .conftest import Serve
 
@@ -21,11 +21,7 @@ DEADLINE = 90.0
 
 @pytest.fixture
 def uno(boards_dir: str, tmp_path: Any) -> Iterator[Simuno]:
-    binary, elf = simuno_binary(), example_elf("Missions")
-    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-        pytest.fail("simulated Uno or examples/Missions not built: `make simuno uno-firmware`", pytrace=False)
-    sim = Simuno(binary, elf, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
-    sim.start()
+    sim = start_example("Missions", os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
     yield sim
     assert sim.stop() == 0, sim.log_text()
 

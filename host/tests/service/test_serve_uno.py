@@ -9,7 +9,7 @@ from typing import Any, Callable, Iterator
 import pytest
 
 from conftest import Emulator
-from simuno.conftest import Simuno, rover_elf, simuno_binary
+from simuno.conftest import Simuno, rover_elf, start_example
 
 from .conftest import Serve
 
@@ -19,11 +19,7 @@ LOSS_WINDOW = 3.0
 
 @pytest.fixture
 def uno(boards_dir: str, tmp_path: Any) -> Iterator[Simuno]:
-    binary, elf = simuno_binary(), rover_elf()
-    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-        pytest.fail("simulated Uno not built: `make simuno uno-firmware`", pytrace=False)
-    sim = Simuno(binary, elf, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
-    sim.start()
+    sim = start_example("Rover", os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"), rover_elf())
     yield sim
     assert sim.stop() == 0, sim.log_text()
 
