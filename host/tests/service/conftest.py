@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import selectors
 import signal
 import subprocess
@@ -84,6 +85,11 @@ class Serve:
     def board(self, key: str) -> Optional[Dict[str, Any]]:
         return next((b for b in self.boards() if b["key"] == key), None)
 
+    def dashboard_url(self, http: int) -> str:
+        """The dashboard's address with its token, once the service started with ``--http HTTP`` logged it."""
+        return str(wait_for(lambda: re.search(r"dashboard at (http://localhost:%d/\?token=\S+)" % http, self.log_text()),
+                            what="the dashboard")[1])
+
     def wait_state(self, key: str, state: str, port: Optional[str] = None) -> Dict[str, Any]:
         def ok() -> Optional[Dict[str, Any]]:
             b = self.board(key)
@@ -98,9 +104,9 @@ def boards_dir(tmp_path: Any) -> str:
     return str(d)
 
 
-@pytest.fixture
-def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[Serve]:
-    """`hubwire serve` on a socket of this test's own; HUBWIRE_SOCKET points this process at it too."""
+def make_serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch, args: Sequence[str] = ()) -> Serve:
+    """`hubwire serve ARGS` (not started yet) on a socket and descriptor cache of this test's own;
+    HUBWIRE_SOCKET points this process at it too, and routing to the service is on in both."""
     sock = str(tmp_path / "run" / "hubwire.sock")
     cache = tmp_path / "cache"
     cache.mkdir()
@@ -109,12 +115,18 @@ def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> It
     env.pop("HUBWIRE_NO_SERVICE", None)
     monkeypatch.setenv("HUBWIRE_SOCKET", sock)
     monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
-    s = Serve(boards_dir, sock, env, str(tmp_path / "serve.log"))
+    return Serve(boards_dir, sock, env, str(tmp_path / "serve.log"), args)
+
+
+@pytest.fixture
+def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[Serve]:
+    """`hubwire serve` on a socket of this test's own; HUBWIRE_SOCKET points this process at it too."""
+    s = make_serve(boards_dir, tmp_path, monkeypatch)
     s.start()
     yield s
     status = s.stop()
     assert status == 0, f"hubwire serve exited with {status}; its log:\n{s.log_text()}"
-    assert not os.path.exists(sock), "hubwire serve left its socket behind"
+    assert not os.path.exists(s.socket), "hubwire serve left its socket behind"
 
 
 @pytest.fixture
