@@ -38,6 +38,19 @@ class Serve:
         self.log = log
         self.proc: Optional[subprocess.Popen] = None
 
+    @classmethod
+    def own(cls, boards_dir: str, tmp_path: Any, args: Sequence[str] = (),
+            extra_env: Optional[Dict[str, str]] = None) -> "Serve":
+        """`hubwire serve ARGS` (not started yet) with a socket, descriptor cache and log of the
+        test's own under ``tmp_path``; routing to the service is on in the commands it runs."""
+        sock = str(tmp_path / "run" / "hubwire.sock")
+        cache = os.path.join(str(tmp_path), "cache")
+        os.makedirs(cache, exist_ok=True)
+        env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=cache,
+                   PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""), **(extra_env or {}))
+        env.pop("HUBWIRE_NO_SERVICE", None)
+        return cls(boards_dir, sock, env, str(tmp_path / "serve.log"), args)
+
     def start(self, timeout: float = 20.0) -> None:
         argv = [sys.executable, "-m", "hubwire", "serve", "--no-usb", "--watch", os.path.join(self.boards_dir, "*"),
                 "--socket", self.socket, "--poll", "0.2", "-v", *self.args]
@@ -105,17 +118,11 @@ def boards_dir(tmp_path: Any) -> str:
 
 
 def make_serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch, args: Sequence[str] = ()) -> Serve:
-    """`hubwire serve ARGS` (not started yet) on a socket and descriptor cache of this test's own;
-    HUBWIRE_SOCKET points this process at it too, and routing to the service is on in both."""
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    env.pop("HUBWIRE_NO_SERVICE", None)
-    monkeypatch.setenv("HUBWIRE_SOCKET", sock)
+    """:meth:`Serve.own`, and HUBWIRE_SOCKET points this process at it too (routing on)."""
+    s = Serve.own(boards_dir, tmp_path, args)
+    monkeypatch.setenv("HUBWIRE_SOCKET", s.socket)
     monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
-    return Serve(boards_dir, sock, env, str(tmp_path / "serve.log"), args)
+    return s
 
 
 @pytest.fixture
