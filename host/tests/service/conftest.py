@@ -16,6 +16,7 @@ import pytest
 
 from conftest import Emulator, wait_until
 from hubwire.testing import emulator_binary
+from simuno.conftest import Simuno, start_example
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 HOST = os.path.dirname(os.path.dirname(HERE))
@@ -134,6 +135,20 @@ def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> It
     status = s.stop()
     assert status == 0, f"hubwire serve exited with {status}; its log:\n{s.log_text()}"
     assert not os.path.exists(s.socket), "hubwire serve left its socket behind"
+
+
+@pytest.fixture
+def served_uno(boards_dir: str, tmp_path: Any) -> Iterator[Callable[..., Simuno]]:
+    """``start(example, elf=None)``: examples/<example> (or ``elf``) on a simulated Uno linked at
+    ``boards_dir/uno``, reset on every open as a real one; after the test simuno must exit cleanly."""
+    started: List[Simuno] = []
+
+    def start(name: str, elf: Optional[str] = None) -> Simuno:
+        started.append(start_example(name, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"), elf))
+        return started[-1]
+    yield start
+    for sim in started:
+        assert sim.stop() == 0, sim.log_text()
 
 
 @pytest.fixture

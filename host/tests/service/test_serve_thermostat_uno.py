@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import os
 import time
-from typing import Any, Iterator
+from typing import Callable
 
 import pytest
 
 import hubwire
-from simuno.conftest import Simuno, start_example
+from simuno.conftest import Simuno
 from simuno.thermostat_home import Home
 
 from .conftest import Serve, wait_for
@@ -22,10 +22,8 @@ STEP_S = 1.0
 
 
 @pytest.fixture
-def thermostat(boards_dir: str, tmp_path: Any) -> Iterator[Simuno]:
-    sim = start_example("Thermostat", os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
-    yield sim
-    assert sim.stop() == 0, sim.log_text()
+def thermostat(served_uno: Callable[..., Simuno]) -> Simuno:
+    return served_uno("Thermostat")
 
 
 def test_the_thermostat_through_the_service(serve: Serve, thermostat: Simuno) -> None:
