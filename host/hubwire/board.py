@@ -11,7 +11,7 @@ roads to it, as python-can's ``BusABC`` is for its buses.
 Every implementation names the protocol as a base class, so mypy checks its signatures against this
 one and refuses to instantiate one that lacks a member; ``isinstance(dev, BoardAPI)`` holds at run
 time too. Nothing is missing on either road (host/tests/roads/ runs one behaviour suite on both).
-``host/tests/roads/`` runs one behaviour suite on both roads.
+The members both declare alike are written once, in a private base protocol.
 """
 from __future__ import annotations
 
@@ -30,13 +30,9 @@ BOARD_METHODS: Tuple[str, ...] = (
     "notifications_pending", "hub_binding", "close")
 
 
-@runtime_checkable
-class BoardAPI(Protocol):
-    """One board, synchronously: values, writes, actions, missions, events, streams, hub channels.
-
-    Values are checked against the channel's type and range before anything is sent
-    (:class:`hubwire.InvalidValue`); the board's refusals raise :class:`hubwire.NakError`; an unknown
-    name raises KeyError listing the channels."""
+class _BothRoads(Protocol):
+    """The members :class:`BoardAPI` and :class:`AsyncBoardAPI` declare alike: what is known without
+    a round trip, callbacks, and the hub's own channels (PROTOCOL.md 10)."""
 
     @property
     def name(self) -> str:
@@ -63,140 +59,7 @@ class BoardAPI(Protocol):
     def health(self) -> LinkHealth:
         ...
 
-    def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
-        ...
-
-    def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
-        ...
-
-    def write(self, name: str, value: Any, *, timeout: Optional[float] = None) -> None:
-        ...
-
-    def call(self, name: str, arg: Any = None, *, timeout: Optional[float] = None) -> Any:
-        ...
-
-    def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
-        """Start a mission: a :class:`hubwire.Job`."""
-        ...
-
     def on(self, name: str, callback: Callable[..., Any]) -> Callable[[], None]:
-        ...
-
-    def events(self, *names: str, timeout: Optional[float] = None) -> Any:
-        """An iterator of :class:`hubwire.ReceivedEvent` (:class:`hubwire.EventStream`)."""
-        ...
-
-    def stream(self, name: str, hz: Optional[float] = None, *, interval_ms: Optional[int] = None,
-               meta: bool = False, timeout: Optional[float] = None, maxlen: int = 1024) -> Any:
-        """An iterator of samples (:class:`hubwire.Stream`)."""
-        ...
-
-    # the hub's own channels (PROTOCOL.md 10)
-    @property
-    def hub(self) -> HubChannels:
-        ...
-
-    def provide(self, name: str, source: Any, **kwargs: Any) -> HubChannel:
-        ...
-
-    def accept(self, name: str, on_write: Any = None, **kwargs: Any) -> Any:
-        ...
-
-    def action(self, name: str, fn: Any = None, **kwargs: Any) -> Any:
-        ...
-
-    def event(self, name: str, **kwargs: Any) -> HubChannel:
-        ...
-
-    def notify(self, name: str, value: Any) -> None:
-        """Send hub event ``name``: checked at once, delivered exactly once and in order."""
-        ...
-
-    def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
-        ...
-
-    @property
-    def notifications_pending(self) -> int:
-        ...
-
-    def hub_binding(self) -> Dict[str, str]:
-        ...
-
-    def close(self) -> None:
-        ...
-
-    def table(self) -> str:
-        ...
-
-    def __getitem__(self, name: str) -> Any:
-        ...
-
-    def __setitem__(self, name: str, value: Any) -> None:
-        ...
-
-    def __contains__(self, name: str) -> bool:
-        ...
-
-
-@runtime_checkable
-class AsyncBoardAPI(Protocol):
-    """One board for asyncio code: :class:`BoardAPI` with its round trips as coroutines
-    (``read``, ``write``, ``call``, ``start``, ``board_id``, ``wait_notified``, ``close``,
-    ``fetch_health``); ``stream`` and ``events`` return async iterators, ``on`` callbacks run on
-    the loop. ``health()`` is what is known without asking (through the service: the board's state
-    only); ``await fetch_health()`` asks."""
-
-    @property
-    def name(self) -> str:
-        ...
-
-    @property
-    def descriptor(self) -> Descriptor:
-        ...
-
-    @property
-    def url(self) -> str:
-        ...
-
-    @property
-    def state(self) -> str:
-        ...
-
-    def channel(self, name: str) -> Channel:
-        ...
-
-    def health(self) -> LinkHealth:
-        ...
-
-    async def fetch_health(self) -> LinkHealth:
-        ...
-
-    async def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
-        ...
-
-    async def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
-        ...
-
-    async def write(self, name: str, value: Any, *, timeout: Optional[float] = None) -> None:
-        ...
-
-    async def call(self, name: str, arg: Any = None, *, timeout: Optional[float] = None) -> Any:
-        ...
-
-    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
-        """Start a mission: a :class:`hubwire.job.AsyncJob`."""
-        ...
-
-    def on(self, name: str, callback: Callable[..., Any]) -> Callable[[], None]:
-        ...
-
-    def events(self, *names: str, timeout: Optional[float] = None) -> Any:
-        """An async iterator of :class:`hubwire.ReceivedEvent`."""
-        ...
-
-    def stream(self, name: str, hz: Optional[float] = None, *, interval_ms: Optional[int] = None,
-               meta: bool = False, timeout: Optional[float] = None, maxlen: int = 1024) -> Any:
-        """An async iterator of samples (subscribed on first use; ``async with`` ends it)."""
         ...
 
     @property
@@ -219,14 +82,103 @@ class AsyncBoardAPI(Protocol):
         """Send hub event ``name``: checked at once, queued, delivered exactly once and in order."""
         ...
 
-    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
-        ...
-
     @property
     def notifications_pending(self) -> int:
         ...
 
     def hub_binding(self) -> Dict[str, str]:
+        ...
+
+
+@runtime_checkable
+class BoardAPI(_BothRoads, Protocol):
+    """One board, synchronously: values, writes, actions, missions, events, streams, hub channels.
+
+    Values are checked against the channel's type and range before anything is sent
+    (:class:`hubwire.InvalidValue`); the board's refusals raise :class:`hubwire.NakError`; an unknown
+    name raises KeyError listing the channels."""
+
+    def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        ...
+
+    def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
+        ...
+
+    def write(self, name: str, value: Any, *, timeout: Optional[float] = None) -> None:
+        ...
+
+    def call(self, name: str, arg: Any = None, *, timeout: Optional[float] = None) -> Any:
+        ...
+
+    def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
+        """Start a mission: a :class:`hubwire.Job`."""
+        ...
+
+    def events(self, *names: str, timeout: Optional[float] = None) -> Any:
+        """An iterator of :class:`hubwire.ReceivedEvent` (:class:`hubwire.EventStream`)."""
+        ...
+
+    def stream(self, name: str, hz: Optional[float] = None, *, interval_ms: Optional[int] = None,
+               meta: bool = False, timeout: Optional[float] = None, maxlen: int = 1024) -> Any:
+        """An iterator of samples (:class:`hubwire.Stream`)."""
+        ...
+
+    def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
+        ...
+
+    def close(self) -> None:
+        ...
+
+    def table(self) -> str:
+        ...
+
+    def __getitem__(self, name: str) -> Any:
+        ...
+
+    def __setitem__(self, name: str, value: Any) -> None:
+        ...
+
+    def __contains__(self, name: str) -> bool:
+        ...
+
+
+@runtime_checkable
+class AsyncBoardAPI(_BothRoads, Protocol):
+    """One board for asyncio code: :class:`BoardAPI` with its round trips as coroutines
+    (``read``, ``write``, ``call``, ``start``, ``board_id``, ``wait_notified``, ``close``,
+    ``fetch_health``); ``stream`` and ``events`` return async iterators, ``on`` callbacks run on
+    the loop. ``health()`` is what is known without asking (through the service: the board's state
+    only); ``await fetch_health()`` asks."""
+
+    async def fetch_health(self) -> LinkHealth:
+        ...
+
+    async def board_id(self, *, timeout: Optional[float] = None) -> Optional[str]:
+        ...
+
+    async def read(self, name: str, *, timeout: Optional[float] = None) -> Any:
+        ...
+
+    async def write(self, name: str, value: Any, *, timeout: Optional[float] = None) -> None:
+        ...
+
+    async def call(self, name: str, arg: Any = None, *, timeout: Optional[float] = None) -> Any:
+        ...
+
+    async def start(self, name: str, goal: Any = None, *, timeout: Optional[float] = None) -> Any:
+        """Start a mission: a :class:`hubwire.job.AsyncJob`."""
+        ...
+
+    def events(self, *names: str, timeout: Optional[float] = None) -> Any:
+        """An async iterator of :class:`hubwire.ReceivedEvent`."""
+        ...
+
+    def stream(self, name: str, hz: Optional[float] = None, *, interval_ms: Optional[int] = None,
+               meta: bool = False, timeout: Optional[float] = None, maxlen: int = 1024) -> Any:
+        """An async iterator of samples (subscribed on first use; ``async with`` ends it)."""
+        ...
+
+    async def wait_notified(self, timeout: Optional[float] = 5.0) -> None:
         ...
 
     async def close(self) -> None:

@@ -6,6 +6,7 @@ device's heartbeat, the loss detection, the page's refresh), made generous for a
 Pictures at three widths, and the layout facts checked on them, are in test_dashboard_layout.py."""
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import selectors
@@ -68,12 +69,37 @@ class Dashboard:
                 self.proc.wait(5)
 
 
+def need_chromium() -> None:
+    """Fails the test with the setup command when Debian's chromium is missing."""
+    if not os.access(CHROMIUM, os.X_OK):
+        pytest.fail(f"{CHROMIUM} not found: bash tools/setup.sh installs Debian's chromium", pytrace=False)
+
+
+def new_page(browser: Any, url: str) -> Any:
+    """A 1400x1000 page at ``url`` whose waits last up to WAIT_MS."""
+    pg = browser.new_page(viewport={"width": 1400, "height": 1000})
+    pg.set_default_timeout(WAIT_MS)
+    pg.goto(url)
+    return pg
+
+
+@contextlib.contextmanager
+def opened(url: str) -> Iterator[Any]:
+    """``url`` on a page of its own chromium (see :func:`browser`), closed afterwards."""
+    need_chromium()
+    with playwright_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        try:
+            yield new_page(b, url)
+        finally:
+            b.close()
+
+
 @pytest.fixture(scope="module")
 def boards(tmp_path_factory: Any) -> Iterator[Tuple[Emulator, Emulator]]:
     d = tmp_path_factory.mktemp("boards")
     actions_bin = os.path.join(os.path.dirname(emulator_binary()), "hubwire-actions-emulator")
-    if not os.access(CHROMIUM, os.X_OK):
-        pytest.fail(f"{CHROMIUM} not found: bash tools/setup.sh installs Debian's chromium", pytrace=False)
+    need_chromium()
     if not os.access(actions_bin, os.X_OK):
         pytest.fail(f"{actions_bin} not found: build it with `make emulator`", pytrace=False)
     rover, actions = Emulator(emulator_binary(), str(d / "rover")), Emulator(actions_bin, str(d / "actions"))
@@ -97,9 +123,7 @@ def browser() -> Iterator[Any]:
 def page(boards: Tuple[Emulator, Emulator], browser: Any) -> Iterator[Any]:
     rover, actions = boards
     dash = Dashboard((rover.link, actions.link))
-    pg = browser.new_page(viewport={"width": 1400, "height": 1000})
-    pg.set_default_timeout(WAIT_MS)
-    pg.goto(dash.url)
+    pg = new_page(browser, dash.url)
     yield pg
     pg.close()
     dash.stop()

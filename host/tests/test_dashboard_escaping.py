@@ -4,7 +4,6 @@ JavaScript) or to be taken as HTML is shown as text in chromium and nothing it c
 from __future__ import annotations
 
 import json
-import os
 import sys
 from typing import Any, Iterator
 
@@ -16,7 +15,7 @@ if sys.version_info < (3, 10):
     pytest.skip("NiceGUI 3 and Playwright need Python 3.10+", allow_module_level=True)
 import playwright.sync_api as playwright_api  # noqa: E402  (after the version check)
 
-from test_dashboard_browser import CHROMIUM, WAIT_MS, Dashboard  # noqa: E402
+from test_dashboard_browser import WAIT_MS, Dashboard, need_chromium, opened  # noqa: E402
 
 #: breaks out of a double-quoted prop into a Vue-evaluated one, then tries HTML and Markdown
 PWN_NAME = 'x" :data-pwn="(()=>{window.hwPwned=1;return 1})()" y="'
@@ -29,18 +28,12 @@ DESCRIPTOR = json.dumps({"p": 1, "n": PWN_NAME, "fw": PWN_HTML, "ch": [
 
 @pytest.fixture(scope="module")
 def page() -> Iterator[Any]:
-    if not os.access(CHROMIUM, os.X_OK):
-        pytest.fail(f"{CHROMIUM} not found: bash tools/setup.sh installs Debian's chromium", pytrace=False)
+    need_chromium()
     with FakeDevice(DESCRIPTOR, max_payload=64) as dev:
         dash = Dashboard((dev.path,))
         try:
-            with playwright_api.sync_playwright() as p:
-                b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-                pg = b.new_page(viewport={"width": 1400, "height": 1000})
-                pg.set_default_timeout(WAIT_MS)
-                pg.goto(dash.url)
+            with opened(dash.url) as pg:
                 yield pg
-                b.close()
         finally:
             dash.stop()
 

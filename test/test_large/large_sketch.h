@@ -64,6 +64,22 @@ class Large : public ::testing::Test {
     drain(stream);
   }
 
+  // A new session on the same port, linked by a hub that takes payloads of up to hubMax bytes.
+  void relink(uint16_t hubMax) {
+    stream.in.clear();
+    device.~Session();
+    new (&device) hubwire::Session(port);
+    SetUp();
+    link(hubMax);
+  }
+
+  // Puts pattern(1024, salt) into kilo; those bytes.
+  Bytes fillKilo(uint8_t salt) {
+    Bytes value = pattern(sizeof(kilo), salt);
+    memcpy(&kilo, value.data(), sizeof(kilo));
+    return value;
+  }
+
   // Sends frames; returns what the device sent, heartbeats aside.
   std::vector<RxFrame> send(uint8_t seq, uint8_t id, const std::vector<Bytes>& fragments) {
     for (auto& f : fragments) sendFrame(stream, 'F', seq, id, f);

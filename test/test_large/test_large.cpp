@@ -220,13 +220,8 @@ TEST_F(Large, AWellFormedLargeMessageThatIsNoControlGetsWhatALongOneWould) {
 TEST_F(Large, ALargeReadIsAnsweredInFragmentsSizedForTheHub) {
   for (uint16_t hubMax : {255, 40, 16}) {
     SCOPED_TRACE(hubMax);
-    stream.in.clear();
-    device.~Session();
-    new (&device) hubwire::Session(port);
-    SetUp();
-    link(hubMax);
-    Bytes value = pattern(1024, 10);
-    memcpy(&kilo, value.data(), 1024);
+    relink(hubMax);
+    Bytes value = fillKilo(10);
     sendFrame(stream, 'R', 0x60, kKilo);
     auto got = run();
     size_t per = std::min<size_t>(hubMax, HUBWIRE_MAX_PAYLOAD) - kFragmentHeader;
@@ -238,8 +233,7 @@ TEST_F(Large, ALargeReadIsAnsweredInFragmentsSizedForTheHub) {
 
 TEST_F(Large, ALargeValueIsStreamedAsFragmentedSamples) {
   link();
-  Bytes value = pattern(1024, 11);
-  memcpy(&kilo, value.data(), 1024);
+  Bytes value = fillKilo(11);
   sendFrame(stream, 'S', 0x61, kKilo, le<uint16_t>(100));
   auto got = run();
   ASSERT_GE(got.size(), 2u);

@@ -34,8 +34,7 @@ class Windows : public Large {
 
 TEST_F(Windows, AWindowCarriesItsBytesTheTotalAndTheWholeValuesHash) {
   link();
-  Bytes value = pattern(1024, 20);
-  memcpy(&kilo, value.data(), 1024);
+  Bytes value = fillKilo(20);
   const size_t room = HUBWIRE_MAX_PAYLOAD - kWindowHeader;
   struct Case {
     uint16_t offset, count;
@@ -59,13 +58,8 @@ TEST_F(Windows, AWindowCarriesItsBytesTheTotalAndTheWholeValuesHash) {
 TEST_F(Windows, AWindowFitsWhatTheHubAccepts) {
   for (uint16_t hubMax : {255, 40, 16}) {
     SCOPED_TRACE(hubMax);
-    stream.in.clear();
-    device.~Session();
-    new (&device) hubwire::Session(port);
-    SetUp();
-    link(hubMax);
-    Bytes value = pattern(1024, 21);
-    memcpy(&kilo, value.data(), 1024);
+    relink(hubMax);
+    Bytes value = fillKilo(21);
     RxFrame f = ask(0x71, kKilo, window(100, 1000));
     size_t n = std::min<size_t>(hubMax, HUBWIRE_MAX_PAYLOAD) - kWindowHeader;
     ASSERT_EQ(f.payload.size(), kWindowHeader + n);
@@ -76,8 +70,7 @@ TEST_F(Windows, AWindowFitsWhatTheHubAccepts) {
 
 TEST_F(Windows, TheHashFollowsTheValueAndAssembledWindowsMatchIt) {
   link();
-  Bytes value = pattern(1024, 22), assembled;
-  memcpy(&kilo, value.data(), 1024);
+  Bytes value = fillKilo(22), assembled;
   uint32_t first = 0;
   for (uint16_t at = 0; at < 1024;) {
     RxFrame f = ask(0x72, kKilo, window(at, 0xFFFF));

@@ -21,6 +21,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from ..errors import HubChannelError, HubwireError
 from ..hub import HubChannel, HubChannels, bind_status
 from ..session.hub_channels import mismatch
+from ..session.runner import run_handler, running_loop
 from ..text import clip
 
 __all__ = ["RemoteHub", "status_lines"]
@@ -141,7 +142,7 @@ class RemoteHub:
 
     def binding(self) -> Dict[str, str]:
         """As ``hub_binding()`` of a direct device, as the service sees the board's channels."""
-        if _running_loop() is self.loop:  # (hubwire.aio: as last heard, pushed by the service)
+        if running_loop() is self.loop:  # (hubwire.aio: as last heard, pushed by the service)
             return dict(self.last_binding)
         return asyncio.run_coroutine_threadsafe(self.fetch_binding(), self.loop).result(30)
 
@@ -223,23 +224,7 @@ class RemoteHub:
                 log.warning("hubwire: hub channel handler %r gave %s: %s", fn, clip(repr(result), 60), clip(str(e), 120))
                 self._answer(rid, error="REJECTED")
 
-        def settle(fut: Any) -> None:
-            exc = fut.exception()
-            loop.call_soon_threadsafe(finish, exc is None, exc if exc is not None else fut.result())
-
-        def call() -> None:
-            try:
-                res = fn(*args)
-            except Exception as e:  # noqa: BLE001 - the board is told REJECTED
-                loop.call_soon_threadsafe(finish, False, e)
-                return
-            if asyncio.iscoroutine(res):
-                on_loop = _running_loop() is loop
-                task: Any = loop.create_task(res) if on_loop else asyncio.run_coroutine_threadsafe(res, loop)
-                task.add_done_callback(settle)
-                return
-            loop.call_soon_threadsafe(finish, True, res)
-        self.remote.hub_dispatch(call)
+        run_handler(loop, self.remote.hub_dispatch, fn, args, finish)
 
     def _answer(self, rid: Any, raw: Optional[bytes] = None, error: Optional[str] = None) -> None:
         if self.sub is None or self.remote.conn.closed:
@@ -322,10 +307,3 @@ def status_lines(rows: List[Dict[str, Any]]) -> str:
     lines = ["  ".join(v.ljust(w) for v, w in zip(t, widths)).rstrip() for t in table]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
-
-
-def _running_loop() -> Optional[asyncio.AbstractEventLoop]:
-    try:
-        return asyncio.get_running_loop()
-    except RuntimeError:
-        return None

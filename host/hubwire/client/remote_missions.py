@@ -95,20 +95,10 @@ class RunFeed:
                 "hubwire serve (follow it again by its run id)", rec.channel.name, rec.run))
 
     def _end(self, rec: MissionRun, status: str, error: Optional[MissionError]) -> None:
-        with rec.cond:
-            if rec.final is not None:
-                return
-            rec.final, rec.error = status, error
-        self._changed(rec, status)
+        rec.end(status, error, self.dispatch)
 
     def _changed(self, rec: MissionRun, status: Optional[str]) -> None:
-        with rec.cond:
-            rec.cond.notify_all()
-        for w in list(rec.wakers):
-            w()
-        if status is not None:
-            for cb in list(rec.status_cbs):
-                self.dispatch(cb, status)
+        rec.changed(status, self.dispatch)
 
 
 async def follow_run(dev: "AsyncRemoteDevice", run_id: str, dispatch: Dispatch = _on_loop) -> "tuple[MissionRun, str]":

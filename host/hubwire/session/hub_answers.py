@@ -21,6 +21,7 @@ from ..text import clip
 from ..wire import messages as m
 from ..wire.frame import Frame
 from ..wire.messages import NakCode
+from .runner import run_handler
 
 __all__ = ["HubAnswers"]
 
@@ -176,30 +177,7 @@ class HubAnswers:
                 log.warning("hubwire: hub channel handler %r raised: %s", fn, clip(repr(result), 160))
                 self._reply(f, m.NAK, bytes((NakCode.REJECTED,)), epoch)
 
-        def settle(fut: Any) -> None:
-            exc = fut.exception()
-            loop.call_soon_threadsafe(finish, exc is None, exc if exc is not None else fut.result())
-
-        def call() -> None:
-            try:
-                res = fn(*args)
-            except Exception as e:  # noqa: BLE001 - the device is told REJECTED
-                loop.call_soon_threadsafe(finish, False, e)
-                return
-            if asyncio.iscoroutine(res):
-                on_loop = _running_loop() is loop
-                task: Any = loop.create_task(res) if on_loop else asyncio.run_coroutine_threadsafe(res, loop)
-                task.add_done_callback(settle)
-                return
-            loop.call_soon_threadsafe(finish, True, res)
-        self.core.dispatch(call)
+        run_handler(loop, self.core.dispatch, fn, args, finish)
 
 
 _REFUSED = object()
-
-
-def _running_loop() -> Optional[asyncio.AbstractEventLoop]:
-    try:
-        return asyncio.get_running_loop()
-    except RuntimeError:
-        return None

@@ -80,6 +80,25 @@ class MissionRun:
     def describe(self) -> str:
         return f"mission {self.channel.name!r} run {self.run}"
 
+    def changed(self, status: Optional[str], dispatch: Callable[..., Any]) -> None:
+        """After a change (on the loop): wake both faces' waiters; with a new ``status``, hand it
+        to the status callbacks through ``dispatch`` (where the application's callbacks run)."""
+        with self.cond:
+            self.cond.notify_all()
+        for w in list(self.wakers):
+            w()
+        if status is not None:
+            for cb in list(self.status_cbs):
+                dispatch(cb, status)
+
+    def end(self, status: str, error: Optional[MissionError], dispatch: Callable[..., Any]) -> None:
+        """The outcome, once: a later one (a repeat, or a loss after the end) changes nothing."""
+        with self.cond:
+            if self.final is not None:
+                return
+            self.final, self.error = status, error
+        self.changed(status, dispatch)
+
 
 class Missions:
     """The missions of one session. ``core`` provides ``link``, ``stats``, ``dispatch`` and
@@ -178,21 +197,10 @@ class Missions:
                                                       ch.name, rec.run))
 
     def _end(self, rec: MissionRun, status: str, error: Optional[MissionError]) -> None:
-        with rec.cond:
-            if rec.final is not None:
-                return
-            rec.final = status
-            rec.error = error
-        self._changed(rec, status)
+        rec.end(status, error, self.core.dispatch)
 
     def _changed(self, rec: MissionRun, status: Optional[str]) -> None:
-        with rec.cond:
-            rec.cond.notify_all()
-        for w in list(rec.wakers):
-            w()
-        if status is not None:
-            for cb in list(rec.status_cbs):
-                self.core.dispatch(cb, status)
+        rec.changed(status, self.core.dispatch)
 
     # ------------------------------------------------------------------------------ link
 

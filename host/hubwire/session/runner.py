@@ -14,7 +14,8 @@ import queue
 import threading
 from typing import Any, Awaitable, Callable, Optional, Set, Tuple, TypeVar
 
-__all__ = ["acquire_loop", "release_loop", "run_sync", "on_loop_thread", "ThreadDispatcher", "LoopDispatcher"]
+__all__ = ["acquire_loop", "release_loop", "run_sync", "on_loop_thread", "running_loop", "run_handler",
+           "ThreadDispatcher", "LoopDispatcher"]
 
 log = logging.getLogger("hubwire")
 T = TypeVar("T")
@@ -75,6 +76,38 @@ def run_sync(loop: asyncio.AbstractEventLoop, aw: Awaitable[T]) -> T:
     except BaseException:
         fut.cancel()
         raise
+
+
+def running_loop() -> Optional[asyncio.AbstractEventLoop]:
+    """The loop running in this thread, or None."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
+
+
+def run_handler(loop: asyncio.AbstractEventLoop, dispatch: Callable[[Callable[[], None]], None],
+                fn: Callable[..., Any], args: Tuple[Any, ...], finish: Callable[[bool, Any], None]) -> None:
+    """Run application handler ``fn(*args)`` through ``dispatch`` (where callbacks run; a coroutine
+    it returns is awaited on ``loop``), then ``finish(True, result)`` or ``finish(False, exception)``
+    on ``loop``: the hub's answer to a board's request waits for the handler, never in it."""
+
+    def settle(fut: Any) -> None:
+        exc = fut.exception()
+        loop.call_soon_threadsafe(finish, exc is None, exc if exc is not None else fut.result())
+
+    def call() -> None:
+        try:
+            res = fn(*args)
+        except Exception as e:  # noqa: BLE001 - the handler's failure is the board's answer
+            loop.call_soon_threadsafe(finish, False, e)
+            return
+        if asyncio.iscoroutine(res):
+            task: Any = loop.create_task(res) if running_loop() is loop else asyncio.run_coroutine_threadsafe(res, loop)
+            task.add_done_callback(settle)
+            return
+        loop.call_soon_threadsafe(finish, True, res)
+    dispatch(call)
 
 
 class ThreadDispatcher:

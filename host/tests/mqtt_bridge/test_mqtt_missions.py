@@ -15,7 +15,7 @@ import pytest
 
 from conftest import Emulator
 from service.conftest import HOST, Serve, wait_for
-from simuno.conftest import Simuno, example_elf, simuno_binary
+from simuno.conftest import start_example
 
 from .conftest import Broker
 from .helpers import f32_shortest
@@ -33,21 +33,13 @@ def served(request: pytest.FixtureRequest, broker: Broker, tmp_path: Any) -> Ite
     boards.mkdir()
     emu: Any
     if request.param == "uno":
-        binary, elf = simuno_binary(), example_elf("Missions")
-        if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-            pytest.fail("simulated Uno or examples/Missions not built: `make simuno uno-firmware`", pytrace=False)
-        emu = Simuno(binary, elf, str(boards / "missions"), str(tmp_path / "simuno.log"))
+        emu = start_example("Missions", str(boards / "missions"), str(tmp_path / "simuno.log"))
     else:
         if not os.access(MISSIONS_EMULATOR, os.X_OK):
             pytest.fail(f"{MISSIONS_EMULATOR} missing: build it with `make emulator`", pytrace=False)
         emu = Emulator(MISSIONS_EMULATOR, str(boards / "missions"))
-    emu.start()
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    serve = Serve(str(boards), sock, env, str(tmp_path / "serve.log"), ["--mqtt", f"127.0.0.1:{broker.port}"])
+        emu.start()
+    serve = Serve.own(str(boards), tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}"])
     out = open(tmp_path / "sub.txt", "w+")
     sub = subprocess.Popen(["mosquitto_sub", "-h", "127.0.0.1", "-p", str(broker.port), "-v", "-q", "1",
                             "-t", f"{BASE}/#", "-t", "hubwire/missions/error"], stdout=out, stderr=subprocess.STDOUT)

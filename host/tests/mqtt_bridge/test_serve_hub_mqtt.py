@@ -16,8 +16,8 @@ import pytest
 
 import hubwire
 from hubwire.errors import HubwireError
-from service.conftest import HOST, Serve, wait_for
-from simuno.conftest import Simuno, example_elf, simuno_binary
+from service.conftest import Serve, make_serve, wait_for
+from simuno.conftest import start_example
 
 from .conftest import Broker
 
@@ -30,23 +30,11 @@ def thermostat_served(broker: Broker, tmp_path: Any, monkeypatch: pytest.MonkeyP
     patterns = list(getattr(request, "param", ["thermostat/*"]))
     if shutil.which("mosquitto_sub") is None:
         pytest.fail("mosquitto_sub missing: run tools/setup.sh (apt-get install mosquitto-clients)", pytrace=False)
-    binary, elf = simuno_binary(), example_elf("Thermostat")
-    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-        pytest.fail("simulated Uno or Thermostat firmware not built: `make simuno uno-firmware`", pytrace=False)
     boards = tmp_path / "boards"
     boards.mkdir()
-    sim = Simuno(binary, elf, str(boards / "uno"), str(tmp_path / "simuno.log"))
-    sim.start()
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    env.pop("HUBWIRE_NO_SERVICE", None)
-    monkeypatch.setenv("HUBWIRE_SOCKET", sock)
-    monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
-    serve = Serve(str(boards), sock, env, str(tmp_path / "serve.log"),
-                  ["--mqtt", f"127.0.0.1:{broker.port}"] + [a for p in patterns for a in ("--mqtt-hub", p)])
+    sim = start_example("Thermostat", str(boards / "uno"), str(tmp_path / "simuno.log"))
+    serve = make_serve(str(boards), tmp_path, monkeypatch,
+                       ["--mqtt", f"127.0.0.1:{broker.port}"] + [a for p in patterns for a in ("--mqtt-hub", p)])
     try:
         serve.start()
         yield serve

@@ -14,7 +14,7 @@ import pytest
 
 from conftest import Emulator
 from hubwire.testing import emulator_binary
-from service.conftest import HOST, Serve, wait_for
+from service.conftest import Serve, wait_for
 
 from .conftest import Broker
 
@@ -28,12 +28,7 @@ def test_serve_with_mqtt_as_a_user_sees_it(broker: Broker, tmp_path: Any) -> Non
     for name, bid in (("a", "aa01"), ("b", "bb02")):
         emus.append(Emulator(emulator_binary(), str(boards / name), ["--board-id", bid]))
         emus[-1].start()
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    serve = Serve(str(boards), sock, env, str(tmp_path / "serve.log"), ["--mqtt", f"127.0.0.1:{broker.port}"])
+    serve = Serve.own(str(boards), tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}"])
     out = open(tmp_path / "sub.txt", "w+")
     sub = subprocess.Popen(["mosquitto_sub", "-h", "127.0.0.1", "-p", str(broker.port), "-v",
                             "-t", "hubwire/#", "-t", "homeassistant/#"], stdout=out, stderr=subprocess.STDOUT)
@@ -94,14 +89,9 @@ def test_two_services_on_one_broker_one_client_commands_both(broker: Broker, tmp
             boards.mkdir()
             emus.append(Emulator(binary, str(boards / "board")))
             emus[-1].start()
-            sock = str(tmp_path / f"run-{name}" / "hubwire.sock")
-            cache = tmp_path / f"cache-{name}"
-            cache.mkdir()
-            env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-                       PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-            services.append(Serve(str(boards), sock, env, str(tmp_path / f"serve-{name}.log"),
-                                  ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", f"hub-{name}",
-                                   "--mqtt-reply-prefix", "replies/"]))
+            services.append(Serve.own(str(boards), tmp_path / f"serve-{name}",  # (outside what it watches)
+                                      ["--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-id", f"hub-{name}",
+                                       "--mqtt-reply-prefix", "replies/"]))
             services[-1].start()
             services[-1].wait_state(key, "ready")
 

@@ -45,10 +45,7 @@ def test_verbose_logs_the_broker_connection_and_discovery(broker: Broker, tmp_pa
     boards.mkdir()
     emu = Emulator(emulator_binary(), str(boards / "a"), [])
     emu.start()
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(tmp_path),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    serve = Serve(str(boards), sock, env, str(tmp_path / "serve.log"), ["--mqtt", f"127.0.0.1:{broker.port}"])
+    serve = Serve.own(str(boards), tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}"])
     serve.start()
     try:
         wait_for(lambda: f"MQTT: connected to the broker at 127.0.0.1:{broker.port}" in serve.log_text(),

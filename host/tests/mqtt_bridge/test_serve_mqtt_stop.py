@@ -3,7 +3,6 @@ the command line with the password in the environment) against a mosquitto that 
 a clean stop (SIGTERM, Ctrl-C) that leaves the service's retained status `offline`."""
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import time
@@ -13,7 +12,7 @@ import pytest
 
 from conftest import Emulator
 from hubwire.testing import emulator_binary
-from service.conftest import HOST, Serve, wait_for
+from service.conftest import Serve, wait_for
 
 from .conftest import Broker
 from .tls import SecureBroker, make_pki
@@ -25,12 +24,7 @@ EXIT_WITHIN_S = 10.0
 def _serve(tmp_path: Any, args: List[str], extra_env: Any = None) -> Serve:
     boards = tmp_path / "boards"
     boards.mkdir(exist_ok=True)
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir(exist_ok=True)
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""), **(extra_env or {}))
-    return Serve(str(boards), sock, env, str(tmp_path / "serve.log"), ["--mqtt-id", "t", *args])
+    return Serve.own(str(boards), tmp_path, ["--mqtt-id", "t", *args], extra_env)
 
 
 def _retained(sub: List[str], topic: str) -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import selectors
 import signal
 import subprocess
@@ -15,6 +16,7 @@ import pytest
 
 from conftest import Emulator, wait_until
 from hubwire.testing import emulator_binary
+from simuno.conftest import Simuno, start_example
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 HOST = os.path.dirname(os.path.dirname(HERE))
@@ -36,6 +38,19 @@ class Serve:
         self.env = env if "HUBWIRE_STATE_DIR" in env else dict(env, HUBWIRE_STATE_DIR=os.path.splitext(log)[0] + "-state")
         self.log = log
         self.proc: Optional[subprocess.Popen] = None
+
+    @classmethod
+    def own(cls, boards_dir: str, tmp_path: Any, args: Sequence[str] = (),
+            extra_env: Optional[Dict[str, str]] = None) -> "Serve":
+        """`hubwire serve ARGS` (not started yet) with a socket, descriptor cache and log of the
+        test's own under ``tmp_path``; routing to the service is on in the commands it runs."""
+        sock = str(tmp_path / "run" / "hubwire.sock")
+        cache = os.path.join(str(tmp_path), "cache")
+        os.makedirs(cache, exist_ok=True)
+        env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=cache,
+                   PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""), **(extra_env or {}))
+        env.pop("HUBWIRE_NO_SERVICE", None)
+        return cls(boards_dir, sock, env, str(tmp_path / "serve.log"), args)
 
     def start(self, timeout: float = 20.0) -> None:
         argv = [sys.executable, "-m", "hubwire", "serve", "--no-usb", "--watch", os.path.join(self.boards_dir, "*"),
@@ -84,6 +99,11 @@ class Serve:
     def board(self, key: str) -> Optional[Dict[str, Any]]:
         return next((b for b in self.boards() if b["key"] == key), None)
 
+    def dashboard_url(self, http: int) -> str:
+        """The dashboard's address with its token, once the service started with ``--http HTTP`` logged it."""
+        return str(wait_for(lambda: re.search(r"dashboard at (http://localhost:%d/\?token=\S+)" % http, self.log_text()),
+                            what="the dashboard")[1])
+
     def wait_state(self, key: str, state: str, port: Optional[str] = None) -> Dict[str, Any]:
         def ok() -> Optional[Dict[str, Any]]:
             b = self.board(key)
@@ -98,23 +118,37 @@ def boards_dir(tmp_path: Any) -> str:
     return str(d)
 
 
+def make_serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch, args: Sequence[str] = ()) -> Serve:
+    """:meth:`Serve.own`, and HUBWIRE_SOCKET points this process at it too (routing on)."""
+    s = Serve.own(boards_dir, tmp_path, args)
+    monkeypatch.setenv("HUBWIRE_SOCKET", s.socket)
+    monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
+    return s
+
+
 @pytest.fixture
 def serve(boards_dir: str, tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[Serve]:
     """`hubwire serve` on a socket of this test's own; HUBWIRE_SOCKET points this process at it too."""
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    env.pop("HUBWIRE_NO_SERVICE", None)
-    monkeypatch.setenv("HUBWIRE_SOCKET", sock)
-    monkeypatch.delenv("HUBWIRE_NO_SERVICE", raising=False)
-    s = Serve(boards_dir, sock, env, str(tmp_path / "serve.log"))
+    s = make_serve(boards_dir, tmp_path, monkeypatch)
     s.start()
     yield s
     status = s.stop()
     assert status == 0, f"hubwire serve exited with {status}; its log:\n{s.log_text()}"
-    assert not os.path.exists(sock), "hubwire serve left its socket behind"
+    assert not os.path.exists(s.socket), "hubwire serve left its socket behind"
+
+
+@pytest.fixture
+def served_uno(boards_dir: str, tmp_path: Any) -> Iterator[Callable[..., Simuno]]:
+    """``start(example, elf=None)``: examples/<example> (or ``elf``) on a simulated Uno linked at
+    ``boards_dir/uno``, reset on every open as a real one; after the test simuno must exit cleanly."""
+    started: List[Simuno] = []
+
+    def start(name: str, elf: Optional[str] = None) -> Simuno:
+        started.append(start_example(name, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"), elf))
+        return started[-1]
+    yield start
+    for sim in started:
+        assert sim.stop() == 0, sim.log_text()
 
 
 @pytest.fixture

@@ -5,7 +5,6 @@ run started by another client (`hubwire call`) shows on the page too."""
 from __future__ import annotations
 
 import os
-import re
 import sys
 from typing import Any
 
@@ -13,13 +12,12 @@ import pytest
 
 from conftest import Emulator
 
-from .conftest import HOST, Serve, wait_for
+from .conftest import HOST, make_serve
 
 if sys.version_info < (3, 10):
     pytest.skip("NiceGUI 3 and Playwright need Python 3.10+", allow_module_level=True)
-import playwright.sync_api as playwright_api  # noqa: E402  (after the version check)
 
-from test_dashboard_browser import CHROMIUM, WAIT_MS, _free_port, field, sel, wait_text  # noqa: E402
+from test_dashboard_browser import _free_port, field, need_chromium, opened, sel, wait_text  # noqa: E402
 
 MISSIONS_EMULATOR = os.path.join(HOST, "..", "build", "emulator", "hubwire-missions-emulator")
 M = "missions.drive"
@@ -27,30 +25,17 @@ M = "missions.drive"
 
 def test_start_progress_cancel_and_result_in_the_browser(boards_dir: str, tmp_path: Any,
                                                           monkeypatch: pytest.MonkeyPatch) -> None:
-    if not os.access(CHROMIUM, os.X_OK):
-        pytest.fail(f"{CHROMIUM} not found: bash tools/setup.sh installs Debian's chromium", pytrace=False)
+    need_chromium()
     if not os.access(MISSIONS_EMULATOR, os.X_OK):
         pytest.fail(f"{MISSIONS_EMULATOR} missing: build it with `make emulator`", pytrace=False)
     http = _free_port()
-    sock = str(tmp_path / "run" / "hubwire.sock")
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    env = dict(os.environ, HUBWIRE_SOCKET=sock, HUBWIRE_CACHE_DIR=str(cache),
-               PYTHONPATH=HOST + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    monkeypatch.setenv("HUBWIRE_SOCKET", sock)
-    serve = Serve(boards_dir, sock, env, str(tmp_path / "serve.log"), ["--http", str(http)])
+    serve = make_serve(boards_dir, tmp_path, monkeypatch, ["--http", str(http)])
     emu = Emulator(MISSIONS_EMULATOR, os.path.join(boards_dir, "missions"))
     emu.start()
     serve.start()
     try:
         serve.wait_state("missions", "ready")
-        url = wait_for(lambda: re.search(r"dashboard at (http://localhost:%d/\?token=\S+)" % http, serve.log_text()),
-                       what="the dashboard")[1]
-        with playwright_api.sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-            page = browser.new_page(viewport={"width": 1400, "height": 1000})
-            page.set_default_timeout(WAIT_MS)
-            page.goto(url)
+        with opened(serve.dashboard_url(http)) as page:
             wait_text(page, sel("state", "missions"), "^ready$")
             wait_text(page, sel("run", M), "^no run yet$")
             # a goal outside the declared range is refused by the hub; nothing starts
@@ -84,7 +69,6 @@ def test_start_progress_cancel_and_result_in_the_browser(boards_dir: str, tmp_pa
             serve.cli("call", "missions", "drive", "0.5")
             wait_text(page, sel("run", M), r"^run 3 .*: succeeded$")
             wait_text(page, sel("mission-result", M), r"^-> 0\.5 m$")
-            browser.close()
     finally:
         status = serve.stop()
         emu.stop()

@@ -3,15 +3,14 @@ drive started once, its progress in order, its result; a second start while it r
 cancel from the command line ends it as cancelled; and the service's one open reset the Uno once."""
 from __future__ import annotations
 
-import os
-from typing import Any, Iterator, List
+from typing import Callable, List
 
 import pytest
 
 import hubwire
 from hubwire import MissionCancelled, NakError
 from hubwire.wire.messages import NakCode
-from simuno.conftest import Simuno, example_elf, simuno_binary
+from simuno.conftest import Simuno
 
 from .conftest import Serve
 
@@ -20,14 +19,8 @@ DEADLINE = 90.0
 
 
 @pytest.fixture
-def uno(boards_dir: str, tmp_path: Any) -> Iterator[Simuno]:
-    binary, elf = simuno_binary(), example_elf("Missions")
-    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-        pytest.fail("simulated Uno or examples/Missions not built: `make simuno uno-firmware`", pytrace=False)
-    sim = Simuno(binary, elf, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
-    sim.start()
-    yield sim
-    assert sim.stop() == 0, sim.log_text()
+def uno(served_uno: Callable[..., Simuno]) -> Simuno:
+    return served_uno("Missions")
 
 
 def test_missions_example_on_the_uno_through_the_service(serve: Serve, uno: Simuno) -> None:

@@ -6,14 +6,14 @@ client that declares the channels after connecting binds them again."""
 from __future__ import annotations
 
 import os
-import threading
 import time
-from typing import Any, Iterator, List
+from typing import Callable
 
 import pytest
 
 import hubwire
-from simuno.conftest import Simuno, example_elf, simuno_binary
+from simuno.conftest import Simuno
+from simuno.thermostat_home import Home
 
 from .conftest import Serve, wait_for
 
@@ -22,37 +22,8 @@ STEP_S = 1.0
 
 
 @pytest.fixture
-def thermostat(boards_dir: str, tmp_path: Any) -> Iterator[Simuno]:
-    binary, elf = simuno_binary(), example_elf("Thermostat")
-    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-        pytest.fail("simulated Uno or Thermostat firmware not built: `make simuno uno-firmware`", pytrace=False)
-    sim = Simuno(binary, elf, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
-    sim.start()
-    yield sim
-    assert sim.stop() == 0, sim.log_text()
-
-
-class Home:
-    """The README's hub side of the thermostat, recording what the board did."""
-
-    def __init__(self) -> None:
-        self.lock = threading.Lock()
-        self.reports: List[int] = []
-        self.alarms: List[float] = []
-        self.hub = hubwire.HubChannels("home")
-        self.setpoint = self.hub.provide("setpoint", 21.5, type="f32", unit="C")
-        self.hub.accept("report", self.on_report, type="u16")
-        self.hub.action("alarm", self.on_alarm)
-        self.hub.event("mode", type="u8")
-
-    def on_report(self, tenths: int) -> None:
-        with self.lock:
-            self.reports.append(tenths)
-
-    def on_alarm(self, temperature: float) -> bool:
-        with self.lock:
-            self.alarms.append(temperature)
-        return True
+def thermostat(served_uno: Callable[..., Simuno]) -> Simuno:
+    return served_uno("Thermostat")
 
 
 def test_the_thermostat_through_the_service(serve: Serve, thermostat: Simuno) -> None:

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import os
 import time
-from typing import Any, Callable, Iterator
+from typing import Callable
 
 import pytest
 
 from conftest import Emulator
-from simuno.conftest import Simuno, rover_elf, simuno_binary
+from simuno.conftest import Simuno, rover_elf
 
 from .conftest import Serve
 
@@ -18,14 +18,8 @@ LOSS_WINDOW = 3.0
 
 
 @pytest.fixture
-def uno(boards_dir: str, tmp_path: Any) -> Iterator[Simuno]:
-    binary, elf = simuno_binary(), rover_elf()
-    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
-        pytest.fail("simulated Uno not built: `make simuno uno-firmware`", pytrace=False)
-    sim = Simuno(binary, elf, os.path.join(boards_dir, "uno"), str(tmp_path / "simuno.log"))
-    sim.start()
-    yield sim
-    assert sim.stop() == 0, sim.log_text()
+def uno(served_uno: Callable[..., Simuno]) -> Simuno:
+    return served_uno("Rover", rover_elf())
 
 
 def test_commands_through_the_service_neither_reset_the_uno_nor_trip_its_failsafe(

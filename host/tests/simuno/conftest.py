@@ -193,6 +193,18 @@ def example_elf(name: str) -> str:
     return os.path.join(REPO, "build", "uno", name, f"{name}.ino.elf")
 
 
+def start_example(name: str, link: str, log: str, elf: Optional[str] = None) -> Simuno:
+    """examples/<name> (or the firmware ``elf``) started on a simulated Uno linked at ``link``;
+    fails the test with the build command when simuno or the firmware is missing. The caller stops it."""
+    binary, elf = simuno_binary(), elf or example_elf(name)
+    if not (os.access(binary, os.X_OK) and os.path.isfile(elf)):
+        pytest.fail(f"simulated Uno or {name} firmware not built: missing {binary} or {elf}; {BUILD_HINT}",
+                    pytrace=False)
+    sim = Simuno(binary, elf, link, log)
+    sim.start()
+    return sim
+
+
 class Examples:
     """Starts example sketches on simulated Unos: ``examples.start("Failsafe")`` returns the
     connected hub device, ``examples.sim("Failsafe")`` its simulator."""

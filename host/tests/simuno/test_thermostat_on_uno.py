@@ -4,8 +4,7 @@ setpoint (R), writes its report into the hub (C), calls the hub's alarm action (
 hub's mode events (!), after the hub's bind report (C id 0)."""
 from __future__ import annotations
 
-import threading
-from typing import Any, List
+from typing import Any
 
 import pytest
 
@@ -13,30 +12,7 @@ import hubwire
 from hubwire.wire.messages import NakCode
 
 from .conftest import Examples, wait_until
-
-
-class Home:
-    """The hub's side of the thermostat (the README's Python half), recording what the board did."""
-
-    def __init__(self) -> None:
-        self.lock = threading.Lock()
-        self.reports: List[int] = []
-        self.alarms: List[float] = []
-        self.reads = 0
-        self.hub = hubwire.HubChannels("home")
-        self.setpoint = self.hub.provide("setpoint", 21.5, type="f32", unit="C")
-        self.hub.accept("report", self.on_report, type="u16")
-        self.hub.action("alarm", self.on_alarm)
-        self.hub.event("mode", type="u8")
-
-    def on_report(self, tenths: int) -> None:
-        with self.lock:
-            self.reports.append(tenths)
-
-    def on_alarm(self, temperature: float) -> bool:
-        with self.lock:
-            self.alarms.append(temperature)
-        return True
+from .thermostat_home import Home
 
 
 def settled(dev: Any, home: Home) -> bool:
