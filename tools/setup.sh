@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(
   make cmake g++ pkg-config git ca-certificates xxd zip unzip
+  time                                                 # peak memory of a compile (make test-compile-cost)
   googletest libgtest-dev nlohmann-json3-dev           # C++ unit tests
   gcc-avr avr-libc binutils-avr arduino-core-avr arduino-builder arduino-ctags  # Uno/Mega/Leonardo builds
   simavr libsimavr-dev libsimavrparts1 libelf-dev      # the simulated Uno
