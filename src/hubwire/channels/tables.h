@@ -76,6 +76,10 @@ struct NamesUnique<D, Decls, cx::Seq<I...> > {
   static constexpr bool value =
       !hashTwice(Hashes<sizeof...(I)>{{NameHash<D, Decls, I>::value...}}) || namesUnique(Decls->list);
 };
+template <typename D, const D* Decls>
+constexpr bool NamesUnique<D, Decls, cx::Seq<> >::value;
+template <typename D, const D* Decls, size_t... I>
+constexpr bool NamesUnique<D, Decls, cx::Seq<I...> >::value;
 
 // A struct channel's layout, compiled to two bytes a field (layout.h) into flash for the session's
 // struct codec.
