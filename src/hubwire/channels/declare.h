@@ -42,7 +42,14 @@
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
-  constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
+  constexpr auto given = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                    \
+  /* the same as a type of a short name: the templates below are named after it, and a name */     \
+  /* spelling 254 declarations in each of them cost g++ 12's debug info the square of the list */  \
+  typedef decltype(given) Given;                                                                   \
+  struct Sketch : Given {                                                                          \
+    constexpr Sketch(const Given& g) : Given(g) {}                                                 \
+  };                                                                                               \
+  constexpr Sketch declared = Sketch(given);                                                       \
   static_assert(::hubwire::declare::Reported<decltype(declared), &declared>::ok, "");                \
   /* the hub channels' values pass through the same value code (strings, structs) */               \
   constexpr uint16_t features =                                                                    \
