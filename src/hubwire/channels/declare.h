@@ -21,6 +21,7 @@
 #include "tables.h"
 #include "hub_table.h"
 #include "report.h"
+#include "steps.h"
 #include "../session/fragments.h"
 
 // The <false, tag> specialisations below exist only to keep the macro's text the same for every
@@ -50,7 +51,12 @@
     constexpr Sketch(const Given& g) : Given(g) {}                                                 \
   };                                                                                               \
   constexpr Sketch declared = Sketch(given);                                                       \
+  inline void hubwire_collect_declared() {}                                                        \
   static_assert(::hubwire::declare::Reported<decltype(declared), &declared>::ok, "");                \
+  inline void hubwire_collect_reported() {}                                                        \
+  HUBWIRE_STEPS(TextStep)                                                                          \
+  HUBWIRE_STEPS(HashStep)                                                                          \
+  HUBWIRE_STEPS(DigestStep)                                                                        \
   /* the hub channels' values pass through the same value code (strings, structs) */               \
   constexpr uint16_t features =                                                                    \
       (uint16_t)(::hubwire::declare::featuresOf(declared.list) | ::hubwire::declare::featuresOf(declared.hub)); \

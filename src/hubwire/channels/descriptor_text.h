@@ -215,6 +215,31 @@ struct PartAt<D, Decls, K, 4> {
   typedef TailPart Type;
 };
 
+// The descriptor's length from the parts' lengths alone, before any character is worked out: one
+// over the hub's limit is refused (table(), tables.h) without building it (a descriptor of 254
+// channels with 60-character descriptions, 34 KB, took avr-g++ 1.5 GB to build only to be refused).
+template <size_t N>
+struct Lengths {
+  size_t n[N];
+};
+template <size_t N>
+constexpr size_t sumOf(const Lengths<N> l, size_t lo, size_t hi) {  // passed by value: see report.h
+  return hi - lo == 1 ? l.n[lo] : sumOf(l, lo, (lo + hi) / 2) + sumOf(l, (lo + hi) / 2, hi);
+}
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<partCount<D>()>::type>
+struct FullLength;
+template <typename D, const D* Decls, size_t... K>
+struct FullLength<D, Decls, cx::Seq<K...> > {
+  static constexpr size_t value = sumOf(Lengths<sizeof...(K)>{{PartAt<D, Decls, K>::Type::length()...}}, 0, sizeof...(K));
+};
+template <typename D, const D* Decls, size_t... K>
+constexpr size_t FullLength<D, Decls, cx::Seq<K...> >::value;
+// The parts built: all of them, or only the head when the whole is refused.
+template <typename D, const D* Decls>
+constexpr size_t builtParts() {
+  return FullLength<D, Decls>::value <= kMaxDescriptor ? partCount<D>() : 1;
+}
+
 // Each part's characters as a constant of its own, worked out once: the JSON in flash copies it.
 template <typename P>
 struct PartConst {
@@ -251,10 +276,10 @@ struct TextParts<D, Decls, cx::Seq<K, K2, R...> > {
   TextParts<D, Decls, cx::Seq<K2, R...> > rest;
 };
 template <typename D, const D* Decls>
-using JsonText = TextParts<D, Decls, typename cx::MakeSeq<partCount<D>()>::type>;
+using JsonText = TextParts<D, Decls, typename cx::MakeSeq<builtParts<D, Decls>()>::type>;
 // One flat list of the parts, which fills the nested arrays in order (brace elision): no part
 // is copied more than once.
-template <typename D, const D* Decls, typename S = typename cx::MakeSeq<partCount<D>()>::type>
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<builtParts<D, Decls>()>::type>
 struct TextOf;
 #if defined(__clang__)  // the braces are left out on purpose (brace elision), see above
 #pragma clang diagnostic push
@@ -301,7 +326,7 @@ template <typename D, const D* Decls>
 constexpr uint32_t HashAfter<D, Decls, 0>::value;
 template <typename D, const D* Decls>
 constexpr uint32_t hashOfText() {
-  return HashAfter<D, Decls, partCount<D>()>::value;
+  return HashAfter<D, Decls, builtParts<D, Decls>()>::value;
 }
 
 // ---- the descriptor as one message for sha256.h: the parts joined as a balanced tree, so that
@@ -316,7 +341,7 @@ struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls
 template <typename D, const D* Decls, size_t Lo, size_t Hi>
 struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
 template <typename D, const D* Decls>
-struct DescriptorMessage : Parts<D, Decls, 0, partCount<D>()> {};
+struct DescriptorMessage : Parts<D, Decls, 0, builtParts<D, Decls>()> {};
 
 // Hello's fixed fields (bytes 6..15: the payload the device accepts, its heartbeat interval, the
 // descriptor's hash and length, little-endian), then the first kDigestSize bytes of the JSON's
