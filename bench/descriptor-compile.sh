@@ -186,11 +186,16 @@ refused from its parts' lengths before it is built.
 
 What did not help on avr-g++ 5.4 (which remembers every call, and keeps what each allocates until it
 collects): the piece constants above (sixteen classes a channel cost it more than the calls they
-save: 204 MiB for 32 x 60), the piece ends as constants instead of calls (190 MiB), SHA-256 rounds
-with 9 arguments reading a remembered message schedule (+7 %), or with their 24 words in one
-struct argument (+60 %). There about 25 KB of compiler memory go to each byte of descriptor: 9 KB
-working out the character, 2 KB its FNV-1a hash and 15 KB its share of the SHA-256 rounds (0.95 MB
-a 64-byte block), which is what still misses the 150 MiB of the 32-channel target.
+save: 204 MiB for 32 x 60), the piece ends as constants instead of calls (190 MiB), or as template
+arguments of one character function a channel (272 MiB), FNV-1a worked out from the words the digest
+reads, or those words kept as arrays a part (no change), SHA-256 rounds with 9 arguments reading a
+remembered message schedule (+7 %), or with their 24 words in one struct argument (+60 %).
+
+Where avr-g++'s 186 MiB for 32 x 60 go (the macro's declarations compiled one more at a time):
+24 MiB the Arduino and library headers, 20 the declarations, their checks and the channel records,
+23 the pieces' lengths, 43 the characters (10 KB each: a few calls, each remembered with its
+arguments), 8 the FNV-1a hash and 65 the SHA-256 digest (0.95 MB a 64-byte block, 64 calls of 24
+arguments): what still misses the 150 MiB of the target.
 
 ## Before issue 32 (a5c2de9, avr-g++, the same script)
 

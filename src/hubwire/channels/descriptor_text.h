@@ -3,9 +3,10 @@
 // with its FNV-1a hash (hello carries it) and SHA-256 digest (hello's descriptor id).
 //
 // What it costs the compiler grows with the descriptor's length, no faster (bench/DESCRIPTOR-COMPILE.md):
-// every character is worked out once, by a few constexpr calls, and both hashes read those same
-// calls again (the compiler remembers each call's value), never the arrays: GCC 5 copies a constant
-// array whole at each read of one element, which made reading the JSON back quadratic.
+// every character is worked out once, by a few constexpr calls. Where calls are remembered (GCC 5,
+// constexpr_text.h) both hashes read those same calls again, never the arrays: GCC 5 copies a
+// constant array whole at each read of one element, which made reading the JSON back quadratic.
+// Elsewhere they read the arrays. steps.h has the compiler work it out in steps.
 #ifndef HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
 #define HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
 
