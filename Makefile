@@ -68,8 +68,9 @@ test-compile-errors:
 	bash test/compile_fail/first_sketch.sh $(BUILD)/compile-errors
 
 # What a sketch's descriptor costs the compiler stays small: 32 channels with 60-character
-# descriptions (the default HUBWIRE_MAX_CHANNELS) build for the Uno within 256 MiB of address space
-# (bench/descriptor-compile.sh; `make bench` measures the whole curve).
+# descriptions (the default HUBWIRE_MAX_CHANNELS) build for the Uno and with g++ (the emulator; the
+# boards of a modern GCC) each within 256 MiB of address space (bench/descriptor-compile.sh; `make
+# bench` measures the whole curve).
 test-compile-cost:
 	BUILD=$(BUILD) bash bench/descriptor-compile.sh --check
 

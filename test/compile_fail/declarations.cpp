@@ -141,6 +141,11 @@ bool startWide(Frameful) { return true; }
 #define CASE , expose("neg", level).writable().range(-5, 900)  // not "min is greater than max"
 #elif HUBWIRE_CASE == 48
 #define CASE , expose("s2", text).failsafe(0)  // strings have no failsafe
+#elif HUBWIRE_CASE == 49  // 64 channels with 250-character descriptions: a 21 KB descriptor
+#define D50 "a description of fifty characters, ten times over. "
+#define ONE(n) , expose(#n, ratio).describe(D50 D50 D50 D50 D50)
+#define EIGHT(p) ONE(p##0) ONE(p##1) ONE(p##2) ONE(p##3) ONE(p##4) ONE(p##5) ONE(p##6) ONE(p##7)
+#define CASE EIGHT(a) EIGHT(b) EIGHT(c) EIGHT(d) EIGHT(e) EIGHT(f) EIGHT(g) EIGHT(h)
 #else
 #define CASE
 #endif

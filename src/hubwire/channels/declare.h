@@ -21,6 +21,7 @@
 #include "tables.h"
 #include "hub_table.h"
 #include "report.h"
+#include "steps.h"
 #include "../session/fragments.h"
 
 // The <false, tag> specialisations below exist only to keep the macro's text the same for every
@@ -42,8 +43,20 @@
 #define HUBWIRE_CHANNELS(var, deviceName, ...)                                                     \
   namespace hubwire_channels_##var {                                                               \
   using namespace ::hubwire::declare;                                                              \
-  constexpr auto declared = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                 \
+  constexpr auto given = ::hubwire::declare::declared(deviceName, __VA_ARGS__);                    \
+  /* the same as a type of a short name: the templates below are named after it, and a name */     \
+  /* spelling 254 declarations in each of them cost g++ 12's debug info the square of the list */  \
+  typedef decltype(given) Given;                                                                   \
+  struct Sketch : Given {                                                                          \
+    constexpr Sketch(const Given& g) : Given(g) {}                                                 \
+  };                                                                                               \
+  constexpr Sketch declared = Sketch(given);                                                       \
+  inline void hubwire_collect_declared() {}                                                        \
   static_assert(::hubwire::declare::Reported<decltype(declared), &declared>::ok, "");                \
+  inline void hubwire_collect_reported() {}                                                        \
+  HUBWIRE_STEPS(TextStep)                                                                          \
+  HUBWIRE_STEPS(HashStep)                                                                          \
+  HUBWIRE_STEPS(DigestStep)                                                                        \
   /* the hub channels' values pass through the same value code (strings, structs) */               \
   constexpr uint16_t features =                                                                    \
       (uint16_t)(::hubwire::declare::featuresOf(declared.list) | ::hubwire::declare::featuresOf(declared.hub)); \

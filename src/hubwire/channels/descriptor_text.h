@@ -3,9 +3,10 @@
 // with its FNV-1a hash (hello carries it) and SHA-256 digest (hello's descriptor id).
 //
 // What it costs the compiler grows with the descriptor's length, no faster (bench/DESCRIPTOR-COMPILE.md):
-// every character is worked out once, by a few constexpr calls, and both hashes read those same
-// calls again (the compiler remembers each call's value), never the arrays: GCC 5 copies a constant
-// array whole at each read of one element, which made reading the JSON back quadratic.
+// every character is worked out once, by a few constexpr calls. Where calls are remembered (GCC 5,
+// constexpr_text.h) both hashes read those same calls again, never the arrays: GCC 5 copies a
+// constant array whole at each read of one element, which made reading the JSON back quadratic.
+// Elsewhere they read the arrays. steps.h has the compiler work it out in steps.
 #ifndef HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
 #define HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
 
@@ -72,6 +73,7 @@ struct HeadPart {
     return i >= start(k) ? pieceAt(piece(k), i - start(k)) : at(i, (uint8_t)(k - 1));
   }
 };
+#if HUBWIRE_CX_REMEMBERS
 // Channel I's entry (id I + 1) of a list: the device's channels, or the hub's (HubSide).
 // A character is found with calls of scalars only: a call on a constant object, or with one as its
 // argument, costs GCC 5 a copy of it, so only the per-piece functions below (remembered, one call
@@ -98,12 +100,6 @@ struct ChannelPart {
          : plain(k)           ? plain(k)[j - preLength(k)]
                               : declare::valueAt(piece(k), j - preLength(k));
   }
-#if !HUBWIRE_CX_REMEMBERS
-  // No call remembered (constexpr_text.h): walking the pieces takes fewer steps than the search.
-  static constexpr char at(size_t i, uint8_t k = 0) {
-    return i < pieceLength(piece(k)) ? pieceAt(piece(k), i) : at(i - pieceLength(piece(k)), (uint8_t)(k + 1));
-  }
-#else
   // The piece holding character i, the last one starting at or before it, in one call: sixteen
   // remembered start(k) cost less than four calls of a binary search.
   static_assert(kPiecesPerChannel == 16, "pieceOf() counts the starts of pieces 1..15");
@@ -113,8 +109,63 @@ struct ChannelPart {
                      (i >= start(11)) + (i >= start(12)) + (i >= start(13)) + (i >= start(14)) + (i >= start(15)));
   }
   static constexpr char at(size_t i) { return charOf(pieceOf(i), i - start(pieceOf(i))); }
-#endif
 };
+#else
+// Where calls are not remembered (GCC from 10 on, clang: constexpr_text.h), piece K of channel
+// I's entry (id I + 1) as constants of their own, each worked out once: its prefix, value and
+// suffix and their lengths. A character is then found in a few steps, without a walk over the
+// pieces or the text before it (which made g++ 12 pay the square of the entry's length). GCC 5
+// keeps the remembered calls above: sixteen classes a channel cost it more than the calls.
+template <typename D, const D* Decls, size_t I, uint8_t K>
+struct PieceConst {
+  static constexpr Piece piece() { return DeclAt<D, Decls, I>::decl.piece(K, (uint8_t)(I + 1)); }
+  static constexpr const char* pre = piece().pre;
+  static constexpr const char* post = piece().post;
+  static constexpr size_t valueStart = cx::length(pre);
+  static constexpr size_t valueEnd = valueStart + valueLength(piece());
+  static constexpr size_t length = valueEnd + cx::length(post);
+  // The value's text itself where it is written as it is (a name, unit or description without
+  // escapes, a type name), else nullptr: its characters are then worked out one by one.
+  static constexpr const char* plain =
+      piece().kind == kLiteral || (piece().kind == kEscaped && valueEnd - valueStart == cx::length(piece().text))
+          ? piece().text
+          : nullptr;
+  static constexpr char at(size_t j) {
+    return j < valueStart ? pre[j]
+         : j >= valueEnd  ? post[j - valueEnd]
+         : plain          ? plain[j - valueStart]
+                          : valueAt(piece(), j - valueStart);
+  }
+};
+template <typename D, const D* Decls, size_t I, uint8_t K>
+constexpr const char* PieceConst<D, Decls, I, K>::pre;
+template <typename D, const D* Decls, size_t I, uint8_t K>
+constexpr const char* PieceConst<D, Decls, I, K>::post;
+template <typename D, const D* Decls, size_t I, uint8_t K>
+constexpr const char* PieceConst<D, Decls, I, K>::plain;
+
+// Channel I's entry: the pieces end to end, character i found by comparing i with where each
+// piece ends (constants), one call deep.
+template <typename D, const D* Decls, size_t I>
+struct ChannelPart {
+  static_assert(kPiecesPerChannel == 16, "ChannelPart lists pieces 0..15");
+  template <uint8_t K>
+  using P = PieceConst<D, Decls, I, K>;
+  static constexpr size_t e0 = P<0>::length, e1 = e0 + P<1>::length, e2 = e1 + P<2>::length, e3 = e2 + P<3>::length,
+                          e4 = e3 + P<4>::length, e5 = e4 + P<5>::length, e6 = e5 + P<6>::length,
+                          e7 = e6 + P<7>::length, e8 = e7 + P<8>::length, e9 = e8 + P<9>::length,
+                          e10 = e9 + P<10>::length, e11 = e10 + P<11>::length, e12 = e11 + P<12>::length,
+                          e13 = e12 + P<13>::length, e14 = e13 + P<14>::length, e15 = e14 + P<15>::length;
+  static constexpr size_t length() { return e15; }
+  static constexpr char at(size_t i) {
+    return i < e0 ? P<0>::at(i) : i < e1 ? P<1>::at(i - e0) : i < e2 ? P<2>::at(i - e1) : i < e3 ? P<3>::at(i - e2)
+         : i < e4 ? P<4>::at(i - e3) : i < e5 ? P<5>::at(i - e4) : i < e6 ? P<6>::at(i - e5) : i < e7 ? P<7>::at(i - e6)
+         : i < e8 ? P<8>::at(i - e7) : i < e9 ? P<9>::at(i - e8) : i < e10 ? P<10>::at(i - e9)
+         : i < e11 ? P<11>::at(i - e10) : i < e12 ? P<12>::at(i - e11) : i < e13 ? P<13>::at(i - e12)
+         : i < e14 ? P<14>::at(i - e13) : P<15>::at(i - e14);
+  }
+};
+#endif
 struct HubHeadPart {  // between the channels and the hub channels
   static constexpr size_t length() { return 9; }
   static constexpr char at(size_t i) { return "],\"hub\":["[i]; }
@@ -165,6 +216,31 @@ struct PartAt<D, Decls, K, 4> {
   typedef TailPart Type;
 };
 
+// The descriptor's length from the parts' lengths alone, before any character is worked out: one
+// over the hub's limit is refused (table(), tables.h) without building it (a descriptor of 254
+// channels with 60-character descriptions, 34 KB, took avr-g++ 1.5 GB to build only to be refused).
+template <size_t N>
+struct Lengths {
+  size_t n[N];
+};
+template <size_t N>
+constexpr size_t sumOf(const Lengths<N> l, size_t lo, size_t hi) {  // passed by value: see report.h
+  return hi - lo == 1 ? l.n[lo] : sumOf(l, lo, (lo + hi) / 2) + sumOf(l, (lo + hi) / 2, hi);
+}
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<partCount<D>()>::type>
+struct FullLength;
+template <typename D, const D* Decls, size_t... K>
+struct FullLength<D, Decls, cx::Seq<K...> > {
+  static constexpr size_t value = sumOf(Lengths<sizeof...(K)>{{PartAt<D, Decls, K>::Type::length()...}}, 0, sizeof...(K));
+};
+template <typename D, const D* Decls, size_t... K>
+constexpr size_t FullLength<D, Decls, cx::Seq<K...> >::value;
+// The parts built: all of them, or only the head when the whole is refused.
+template <typename D, const D* Decls>
+constexpr size_t builtParts() {
+  return FullLength<D, Decls>::value <= kMaxDescriptor ? partCount<D>() : 1;
+}
+
 // Each part's characters as a constant of its own, worked out once: the JSON in flash copies it.
 template <typename P>
 struct PartConst {
@@ -201,10 +277,10 @@ struct TextParts<D, Decls, cx::Seq<K, K2, R...> > {
   TextParts<D, Decls, cx::Seq<K2, R...> > rest;
 };
 template <typename D, const D* Decls>
-using JsonText = TextParts<D, Decls, typename cx::MakeSeq<partCount<D>()>::type>;
+using JsonText = TextParts<D, Decls, typename cx::MakeSeq<builtParts<D, Decls>()>::type>;
 // One flat list of the parts, which fills the nested arrays in order (brace elision): no part
 // is copied more than once.
-template <typename D, const D* Decls, typename S = typename cx::MakeSeq<partCount<D>()>::type>
+template <typename D, const D* Decls, typename S = typename cx::MakeSeq<builtParts<D, Decls>()>::type>
 struct TextOf;
 #if defined(__clang__)  // the braces are left out on purpose (brace elision), see above
 #pragma clang diagnostic push
@@ -251,7 +327,7 @@ template <typename D, const D* Decls>
 constexpr uint32_t HashAfter<D, Decls, 0>::value;
 template <typename D, const D* Decls>
 constexpr uint32_t hashOfText() {
-  return HashAfter<D, Decls, partCount<D>()>::value;
+  return HashAfter<D, Decls, builtParts<D, Decls>()>::value;
 }
 
 // ---- the descriptor as one message for sha256.h: the parts joined as a balanced tree, so that
@@ -266,7 +342,7 @@ struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls
 template <typename D, const D* Decls, size_t Lo, size_t Hi>
 struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
 template <typename D, const D* Decls>
-struct DescriptorMessage : Parts<D, Decls, 0, partCount<D>()> {};
+struct DescriptorMessage : Parts<D, Decls, 0, builtParts<D, Decls>()> {};
 
 // Hello's fixed fields (bytes 6..15: the payload the device accepts, its heartbeat interval, the
 // descriptor's hash and length, little-endian), then the first kDigestSize bytes of the JSON's

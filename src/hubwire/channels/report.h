@@ -57,6 +57,8 @@ template <typename D, const D* Decls, bool Hub, bool Unique = NamesUnique<D, Dec
 struct ReportRepeated {
   static const bool ok = true;
 };
+template <typename D, const D* Decls, bool Hub, bool Unique>
+const bool ReportRepeated<D, Decls, Hub, Unique>::ok;
 template <typename D, const D* Decls, bool Hub>
 struct ReportRepeated<D, Decls, Hub, false>
     : InChannel<typename NameOf<D, Decls, firstRepeated(copyOf(Decls->list))>::type, kSameName, Hub> {};

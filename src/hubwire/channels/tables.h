@@ -76,6 +76,10 @@ struct NamesUnique<D, Decls, cx::Seq<I...> > {
   static constexpr bool value =
       !hashTwice(Hashes<sizeof...(I)>{{NameHash<D, Decls, I>::value...}}) || namesUnique(Decls->list);
 };
+template <typename D, const D* Decls>
+constexpr bool NamesUnique<D, Decls, cx::Seq<> >::value;
+template <typename D, const D* Decls, size_t... I>
+constexpr bool NamesUnique<D, Decls, cx::Seq<I...> >::value;
 
 // A struct channel's layout, compiled to two bytes a field (layout.h) into flash for the session's
 // struct codec.
@@ -200,7 +204,9 @@ constexpr ChannelTable table(const typename Stored<D, Decls>::JsonType& json,
   static_assert(allTextsShort(Decls->list) && shortText(Decls->dev.name) && shortText(Decls->dev.firmwareText),
                 "a name, unit, description, layout or firmware text longer than 255 characters");
   static_assert(allTextsShort(Decls->hub), "a hub channel's name, unit or description longer than 255 characters");
-  static_assert(sizeof(JsonText<D, Decls>) <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
+  static_assert(FullLength<D, Decls>::value <= kMaxDescriptor, "descriptor longer than the 16 KiB a hub accepts");
+  static_assert(sizeof(JsonText<D, Decls>) == FullLength<D, Decls>::value || FullLength<D, Decls>::value > kMaxDescriptor,
+                "the JSON is as long as its parts");
   static_assert(sizeof(JsonAndDigest<D, Decls>) == kHelloFixed + kDigestSize + sizeof(JsonText<D, Decls>),
                 "hello's fixed fields, the digest and the JSON lie end to end");
   return ChannelTable{json.text.head.c, hashOfText<D, Decls>(), (uint16_t)sizeof(JsonText<D, Decls>), infos.v,
