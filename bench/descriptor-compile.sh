@@ -26,6 +26,7 @@ if [ "${1:-}" = --check ]; then check=1; shift; fi
 tree=$(realpath "${1:-.}")
 out=$(realpath -m "${BUILD:-build}/descriptor-compile")
 mkdir -p "$out"
+[ -x /usr/bin/time ] || { echo "descriptor-compile: /usr/bin/time is missing: apt-get install time (bash tools/setup.sh does)" >&2; exit 1; }
 core=/usr/share/arduino/hardware/arduino/avr
 
 # The AVR platform's compile recipe for a .cpp (platform.txt: compiler.cpp.flags and the Uno's
