@@ -56,6 +56,8 @@ class HubDevice(PtyPeer):
         self.nonce = 0x1234567
         self._waiting: Dict[Tuple[int, int], "threading.Event"] = {}
         self._answers: Dict[Tuple[int, int], Frame] = {}
+        #: every answer the hub sent to the device's own transactions, in arrival order
+        self.answers_seen: List[Frame] = []
 
     def _hello(self, reply: bool) -> None:
         h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_SEQ_RULES | (m.FLAG_REPLY if reply else 0), self.nonce, self.max_payload, 250,
@@ -125,6 +127,7 @@ class HubDevice(PtyPeer):
                 self.send(m.ACK, f.seq, f.id)
         elif f.type in (m.ACK, m.NAK, m.RESPONSE, m.CHUNK):
             key = (f.seq, f.id)
+            self.answers_seen.append(f)
             ev = self._waiting.pop(key, None)
             if ev is not None:
                 self._answers[key] = f

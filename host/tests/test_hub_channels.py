@@ -256,6 +256,30 @@ def test_slow_handler_answers_once_when_done() -> None:
         assert a is not None and a.payload == b"\x01" and calls == [2.0]
 
 
+def test_an_answer_the_device_gave_up_on_is_not_sent_late() -> None:
+    """The device's own R, C, J go one at a time (PROTOCOL.md 4.4): once it sends a newer one it has
+    given up on the earlier one, so a slow handler's answer to that one is dropped, not sent late,
+    where (the device's counter having come round) it could meet a newer request of its seq and id."""
+    gate = threading.Event()
+    calls: List[float] = []
+    with HubDevice() as dev, connect(dev) as d:
+        @d.action("dock")
+        def dock(speed: float) -> bool:
+            calls.append(speed)
+            gate.wait(10)
+            return True
+        assert wait_for(lambda: dev.binds and dev.binds[-1][3] == 0)
+        assert dev.ask(m.CONTROL, 3, f32(2.0), tries=2) is None  # the device gives up meanwhile
+        seq = dev._seq
+        assert wait_for(lambda: calls == [2.0])
+        assert dev.ask(m.REQUEST, 1) is not None  # a newer transaction, answered at once
+        gate.set()
+        stats = d.session.stats
+        old = lambda: [f for f in dev.answers_seen if (f.seq, f.id) == (seq, 3)]  # noqa: E731
+        assert wait_for(lambda: bool(old()) or getattr(stats, "device_answers_dropped", 0) == 1)
+        assert old() == [] and calls == [2.0]
+
+
 def test_device_downloads_hub_descriptor() -> None:
     with HubDevice() as dev, connect(dev, hub=full_hub([])) as d:
         assert wait_for(lambda: dev.hub_hello is not None and dev.hub_hello.descriptor_length > 0)

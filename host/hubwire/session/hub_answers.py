@@ -4,7 +4,8 @@
 Answered only once the device's descriptor is loaded (its ``"hub"`` list maps hub ids to names);
 before that the device's retries are the flow control. A device ``C`` with the seq and id of the
 last device transaction is a duplicate: its remembered answer is sent again and the handler does
-not run twice (the memory is reset by a new device nonce). Handlers run where the application's
+not run twice (the memory is reset by a new device nonce). The answer to a transaction the device
+has given up on (it sent a newer one while the handler ran) is dropped, never sent late. Handlers run where the application's
 callbacks run (the dispatcher thread, or the caller's loop for ``hubwire.aio``; a coroutine is
 awaited there); the answer goes out when they return.
 """
@@ -79,6 +80,11 @@ class HubAnswers:
     def _reply(self, f: Frame, type: int, payload: bytes = b"", epoch: Optional[int] = None) -> None:
         if epoch is not None and epoch != self._epoch:
             return  # the device rebooted while the handler ran
+        if epoch is not None and self._last != (f.type, f.seq, f.id):
+            # the device sent a newer R, C or J while the handler ran: it gave up on this one (one
+            # at a time, PROTOCOL.md 10.2), and a late answer could meet a newer one of its seq and id
+            self.core.stats.device_answers_dropped += 1
+            return
         if type == m.NAK:
             self.core.stats.device_refused += 1
         if self._last == (f.type, f.seq, f.id):

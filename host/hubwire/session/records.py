@@ -76,6 +76,7 @@ class Stats:
     device_duplicates: int = 0
     device_refused: int = 0
     device_unanswered: int = 0
+    device_answers_dropped: int = 0  # a handler finished after the device gave up on its transaction
     binds_sent: int = 0
     bind_retries: int = 0
     hub_events_delivered: int = 0
