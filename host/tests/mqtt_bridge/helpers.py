@@ -138,6 +138,20 @@ class Watcher:
     def on(self, topic: str) -> List[Any]:
         return [json.loads(p) for t, p, _ in self.all if t == topic]
 
+    async def wait_quiet(self, topic: str, quiet: float, timeout: float = 20.0) -> int:
+        """Wait until nothing new arrives on ``topic`` for ``quiet`` s (what was already on its way has
+        come, however busy the machine); returns the count then."""
+        deadline = asyncio.get_running_loop().time() + timeout
+        n = len(self.on(topic))
+        while True:
+            await asyncio.sleep(quiet)
+            now = len(self.on(topic))
+            if now == n:
+                return n
+            if asyncio.get_running_loop().time() > deadline:
+                raise AssertionError(f"{topic} still receiving after {timeout} s ({now} messages)")
+            n = now
+
     async def wait_for(self, pred: Any, timeout: float = 10.0, what: str = "a message") -> None:
         async def loop() -> None:
             while not pred():

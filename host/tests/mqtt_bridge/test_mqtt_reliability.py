@@ -202,18 +202,19 @@ def test_streams_at_the_rate_asked_under_the_ceiling(broker: Broker, emulators, 
                 seqs = [s["seq"] for s in samples]
                 assert seqs == sorted(seqs)
                 assert await w.request("hubwire/rover/unsubscribe/imu", '{"client": "t"}') == {"ok": True, "hz": 0.0}
-                await asyncio.sleep(0.3)
-                n1 = len(w.on(topic))
-                await asyncio.sleep(1.0)
+                # samples already on their way still come (a busy machine delays them); then none:
+                # quiet for 10 periods of the stream, then nothing for 2 s more
+                n1 = await w.wait_quiet(topic, 10 / ceiling)
+                await asyncio.sleep(2.0)
                 assert len(w.on(topic)) == n1  # stopped: nobody asks any more
                 # a lease not renewed ends by itself
                 lease = 1.0
                 r = await w.request("hubwire/rover/subscribe/imu", f'{{"hz": 10, "lease_s": {lease}}}')
                 assert r["ok"] and r["lease_s"] == lease and r["hz"] == 10
                 await w.wait_for(lambda: len(w.on(topic)) > n1, 5, "samples again")
-                await asyncio.sleep(lease + 1.5)  # the lease, and time for a busy machine to act on it
-                n2 = len(w.on(topic))
-                await asyncio.sleep(1.0)
+                await asyncio.sleep(lease)
+                n2 = await w.wait_quiet(topic, 10 / 10)  # the lease ended: quiet for 10 periods
+                await asyncio.sleep(2.0)
                 assert len(w.on(topic)) == n2
         await fleet.close()
     run(main())

@@ -40,6 +40,8 @@ def test_device_events_arrive_while_the_device_writes_to_the_hub(tmp_path: Any, 
             time.sleep(0.3)
             assert (dev.tally_acked > 20) == hub_load  # the device wrote to the hub all along, or never
             assert got == [i % 2 == 0 for q in batches for i in range(q)]
-            assert dev.session.stats.duplicate_events == 0
+            # `got` holds every event once, in order: none was lost or taken for a retry. (The device
+            # does re-send an event whose ACK comes after its retry interval, 100 ms: on a loaded
+            # machine some do, and the hub acknowledges those again without delivering them.)
     finally:
         stop_process(emu)
