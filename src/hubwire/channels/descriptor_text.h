@@ -100,13 +100,15 @@ struct ChannelPart {
          : plain(k)           ? plain(k)[j - preLength(k)]
                               : declare::valueAt(piece(k), j - preLength(k));
   }
-  // The piece holding character i, the last one starting at or before it, in one call: sixteen
-  // remembered start(k) cost less than four calls of a binary search.
-  static_assert(kPiecesPerChannel == 16, "pieceOf() counts the starts of pieces 1..15");
+  // The piece holding character i, the last one starting at or before it, in one call: a binary
+  // search written out as nested conditionals, so that four remembered start(k) are asked.
+  static_assert(kPiecesPerChannel == 16, "pieceOf() searches the starts of pieces 1..15");
   static constexpr uint8_t pieceOf(size_t i) {
-    return (uint8_t)((i >= start(1)) + (i >= start(2)) + (i >= start(3)) + (i >= start(4)) + (i >= start(5)) +
-                     (i >= start(6)) + (i >= start(7)) + (i >= start(8)) + (i >= start(9)) + (i >= start(10)) +
-                     (i >= start(11)) + (i >= start(12)) + (i >= start(13)) + (i >= start(14)) + (i >= start(15)));
+    return i < start(8)
+               ? (i < start(4) ? (i < start(2) ? (i < start(1) ? 0 : 1) : (i < start(3) ? 2 : 3))
+                               : (i < start(6) ? (i < start(5) ? 4 : 5) : (i < start(7) ? 6 : 7)))
+               : (i < start(12) ? (i < start(10) ? (i < start(9) ? 8 : 9) : (i < start(11) ? 10 : 11))
+                                : (i < start(14) ? (i < start(13) ? 12 : 13) : (i < start(15) ? 14 : 15)));
   }
   static constexpr char at(size_t i) { return charOf(pieceOf(i), i - start(pieceOf(i))); }
 };
@@ -302,17 +304,18 @@ constexpr JsonText<D, Decls> TextConst<D, Decls>::value;
 
 // ---- the hash hello carries: FNV-1a over the parts, eight characters a call; the state after
 // each part is a constant of its own, so no evaluation goes deeper than one part ----
+// fnv1a() written in rather than called: on GCC 5 a call costs more memory than its arithmetic.
+#define HUBWIRE_FNV(h, i) (((h) ^ (uint32_t)(uint8_t)partChar<P>(i)) * 0x01000193UL)
 template <typename P>
 constexpr uint32_t fnvPart(uint32_t h, size_t i = 0) {
   return i + 8 <= sizeof(Chars<P>)
-             ? fnvPart<P>(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(h, (uint8_t)partChar<P>(i)), (uint8_t)partChar<P>(i + 1)),
-                                                               (uint8_t)partChar<P>(i + 2)), (uint8_t)partChar<P>(i + 3)),
-                                                 (uint8_t)partChar<P>(i + 4)), (uint8_t)partChar<P>(i + 5)), (uint8_t)partChar<P>(i + 6)),
-                                 (uint8_t)partChar<P>(i + 7)),
+             ? fnvPart<P>(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(
+                              h, i), i + 1), i + 2), i + 3), i + 4), i + 5), i + 6), i + 7),
                           i + 8)
-         : i < sizeof(Chars<P>) ? fnvPart<P>(fnv1a(h, (uint8_t)partChar<P>(i)), i + 1)
-                           : h;
+         : i < sizeof(Chars<P>) ? fnvPart<P>(HUBWIRE_FNV(h, i), i + 1)
+                                : h;
 }
+#undef HUBWIRE_FNV
 template <typename D, const D* Decls, size_t K>
 struct HashAfter {  // the hash of parts 0..K-1
   static constexpr uint32_t value = fnvPart<typename PartAt<D, Decls, K - 1>::Type>(HashAfter<D, Decls, K - 1>::value);
@@ -331,14 +334,46 @@ constexpr uint32_t hashOfText() {
 }
 
 // ---- the descriptor as one message for sha256.h: the parts joined as a balanced tree, so that
-// reading a character goes log2(parts) levels deep ----
+// reading a word goes log2(parts) levels deep, one call a level (each call costs GCC 5 memory) ----
+#if HUBWIRE_CX_REMEMBERS
+#define HUBWIRE_PART_CHAR(P, i) ((uint32_t)(uint8_t)P::at(i))
+#else
+#define HUBWIRE_PART_CHAR(P, i) ((uint32_t)(uint8_t)PartConst<P>::value.c[i])
+#endif
+// A block's words (sha256.h): word(i), word(i + 4), ... as pairs.
+#define HUBWIRE_PAIR_AT(k) ((uint64_t)word(i + 8 * k) << 32 | word(i + 8 * k + 4))
+#define HUBWIRE_BLOCK_OF_WORDS                                                                          \
+  sha256::detail::Block{{HUBWIRE_PAIR_AT(0), HUBWIRE_PAIR_AT(1), HUBWIRE_PAIR_AT(2), HUBWIRE_PAIR_AT(3), \
+                         HUBWIRE_PAIR_AT(4), HUBWIRE_PAIR_AT(5), HUBWIRE_PAIR_AT(6), HUBWIRE_PAIR_AT(7)}}
 template <typename P>
 struct PartMessage {
   static constexpr size_t length() { return sizeof(Chars<P>); }  // a constant: clang would work out P::length() anew
-  static constexpr char at(size_t i) { return partChar<P>(i); }
+  static constexpr char at(size_t i) { return (char)HUBWIRE_PART_CHAR(P, i); }
+  static constexpr uint32_t word(size_t i) {
+    return HUBWIRE_PART_CHAR(P, i) << 24 | HUBWIRE_PART_CHAR(P, i + 1) << 16 | HUBWIRE_PART_CHAR(P, i + 2) << 8 |
+           HUBWIRE_PART_CHAR(P, i + 3);
+  }
+  static constexpr sha256::detail::Block block(size_t i) { return HUBWIRE_BLOCK_OF_WORDS; }
 };
+#undef HUBWIRE_PART_CHAR
 template <typename D, const D* Decls, size_t Lo, size_t Hi, bool One = Hi - Lo == 1>
-struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls, (Lo + Hi) / 2, Hi> > {};
+struct Parts {
+  typedef Parts<D, Decls, Lo, (Lo + Hi) / 2> A;
+  typedef Parts<D, Decls, (Lo + Hi) / 2, Hi> B;
+  static constexpr size_t length() { return A::length() + B::length(); }
+  static constexpr char at(size_t i) { return i < A::length() ? A::at(i) : B::at(i - A::length()); }
+  static constexpr uint32_t word(size_t i) {  // a word across two parts: its bytes one by one
+    return i + 4 <= A::length() ? A::word(i)
+         : i >= A::length()     ? B::word(i - A::length())
+                                : (uint32_t)(uint8_t)at(i) << 24 | (uint32_t)(uint8_t)at(i + 1) << 16 |
+                                      (uint32_t)(uint8_t)at(i + 2) << 8 | (uint8_t)at(i + 3);
+  }
+  static constexpr sha256::detail::Block block(size_t i) {  // one descent a block where it lies in one half
+    return i + 64 <= A::length() ? A::block(i) : i >= A::length() ? B::block(i - A::length()) : HUBWIRE_BLOCK_OF_WORDS;
+  }
+};
+#undef HUBWIRE_PAIR_AT
+#undef HUBWIRE_BLOCK_OF_WORDS
 template <typename D, const D* Decls, size_t Lo, size_t Hi>
 struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
 template <typename D, const D* Decls>
