@@ -192,7 +192,7 @@ struct Round<64, false> {
   }
 };
 // A block's sixteen words, in pairs: from Msg::block() where the message has it (Parts in
-// descriptor_text.h: one descent of its tree a block, not one a word) and the block holds no padding,
+// descriptor_digest.h: one descent of its tree a block, not one a word) and the block holds no padding,
 // else a word at a time.
 #define HUBWIRE_SHA_W(i) HUBWIRE_SHA_PAIR(PaddedWord<Msg>::at(at + 8 * i), PaddedWord<Msg>::at(at + 8 * i + 4))
 template <typename Msg>
