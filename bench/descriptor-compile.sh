@@ -198,6 +198,38 @@ Where avr-g++'s 186 MiB for 32 x 60 go (the macro's declarations compiled one mo
 arguments), 8 the FNV-1a hash and 65 the SHA-256 digest (0.95 MB a 64-byte block, 64 calls of 24
 arguments): what still misses the 150 MiB of the target.
 
+## Then: avr-g++ 5.4, 32 x 60 from 186 to 166 MiB (d72eb4a, the same script)
+
+What GCC 5 costs was measured piece by piece (a change, then 32 x 60 again): every constexpr call
+it makes costs about 1 to 2 KB that it keeps (the call remembered, with a copy of each argument:
+a round of 24 word arguments about 7 KB), and every operation it evaluates about 40 to 50 bytes, even
+one whose value it has seen before (it remembers calls, not expressions). So what lowers it is fewer
+calls with fewer arguments, not less arithmetic. Each step, in order (MiB for 32 x 60):
+
+| step | avr-g++ 32 x 60 |
+| --- | --- |
+| before (d72eb4a) | 186 |
+| a character's piece found by a binary search written out (four remembered piece starts asked, not fifteen) | 185 |
+| FNV-1a written into the hash of a part, not a call of fnv1a() a character | 182 |
+| a word of the digest's message read from the part in one call: no layer between the padding and the parts' tree, the tree's nodes reading their halves' words directly (sha256.h PaddedWord, descriptor_digest.h Parts) | 180 |
+| the schedule's window passed as pairs of words in 64-bit parameters, even and odd rounds alternating, so that a pair passes on unchanged (16 or 17 parameters a round, not 24) | 176 |
+| a 64-byte block read with one descent of the parts' tree where it lies in one part (Parts::block, GCC 5 only: g++ 12 paid 4 MiB more for it), not one descent a word | 169 |
+| FNV-1a reading each character's remembered call itself, not through partChar() | 166 |
+
+What did not help: a tree of eight subtrees a node instead of two (182: fewer levels, more calls
+to find the subtree); each channel's entry built piece by piece, each piece's prefix, value and
+suffix a pack read straight from its text (14 MiB less for the text, but the hashes then read the
+arrays, which GCC 5 copies at each read or each call that is given one: 13 MiB more); those arrays
+four characters to a word (185); FNV-1a 32 characters a call (169, and g++ 12 164); two rounds a call with the
+working variables also in pairs (115 MiB for a 4.3 KB text alone against 67: the second round
+evaluates the first one's results again, and evaluating costs memory even when the values are
+known); Ch and Maj with fewer operations (no change); a character's piece and offset written into
+its at() instead of asked of charOf() (175: the remembered calls asked again cost more than the one
+call). The pairs cost g++ 12 about 2 MiB (137 to 139 for 32 x 60; 80 channels 2 to 4 MiB); avr-g++
+254 bare channels, where it collects its garbage between steps, 376 became 379. What still misses the target, by
+the same kind of measurement: the characters (at(), pieceOf() and charOf(): about 35 MiB), the
+64 rounds a block (about 40), reading the message for them (8) and FNV-1a (5).
+
 ## Before issue 32 (a5c2de9, avr-g++, the same script)
 
 | channels | description | JSON bytes | avr-g++ |

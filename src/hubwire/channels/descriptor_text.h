@@ -6,7 +6,8 @@
 // every character is worked out once, by a few constexpr calls. Where calls are remembered (GCC 5,
 // constexpr_text.h) both hashes read those same calls again, never the arrays: GCC 5 copies a
 // constant array whole at each read of one element, which made reading the JSON back quadratic.
-// Elsewhere they read the arrays. steps.h has the compiler work it out in steps.
+// Elsewhere they read the arrays. steps.h has the compiler work it out in steps; the digest's message
+// and the constant stored in flash are in descriptor_digest.h.
 #ifndef HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
 #define HUBWIRE_CHANNELS_DESCRIPTOR_TEXT_H
 
@@ -100,13 +101,15 @@ struct ChannelPart {
          : plain(k)           ? plain(k)[j - preLength(k)]
                               : declare::valueAt(piece(k), j - preLength(k));
   }
-  // The piece holding character i, the last one starting at or before it, in one call: sixteen
-  // remembered start(k) cost less than four calls of a binary search.
-  static_assert(kPiecesPerChannel == 16, "pieceOf() counts the starts of pieces 1..15");
+  // The piece holding character i, the last one starting at or before it, in one call: a binary
+  // search written out as nested conditionals, so that four remembered start(k) are asked.
+  static_assert(kPiecesPerChannel == 16, "pieceOf() searches the starts of pieces 1..15");
   static constexpr uint8_t pieceOf(size_t i) {
-    return (uint8_t)((i >= start(1)) + (i >= start(2)) + (i >= start(3)) + (i >= start(4)) + (i >= start(5)) +
-                     (i >= start(6)) + (i >= start(7)) + (i >= start(8)) + (i >= start(9)) + (i >= start(10)) +
-                     (i >= start(11)) + (i >= start(12)) + (i >= start(13)) + (i >= start(14)) + (i >= start(15)));
+    return i < start(8)
+               ? (i < start(4) ? (i < start(2) ? (i < start(1) ? 0 : 1) : (i < start(3) ? 2 : 3))
+                               : (i < start(6) ? (i < start(5) ? 4 : 5) : (i < start(7) ? 6 : 7)))
+               : (i < start(12) ? (i < start(10) ? (i < start(9) ? 8 : 9) : (i < start(11) ? 10 : 11))
+                                : (i < start(14) ? (i < start(13) ? 12 : 13) : (i < start(15) ? 14 : 15)));
   }
   static constexpr char at(size_t i) { return charOf(pieceOf(i), i - start(pieceOf(i))); }
 };
@@ -302,17 +305,22 @@ constexpr JsonText<D, Decls> TextConst<D, Decls>::value;
 
 // ---- the hash hello carries: FNV-1a over the parts, eight characters a call; the state after
 // each part is a constant of its own, so no evaluation goes deeper than one part ----
+// fnv1a() written in rather than called: on GCC 5 a call costs more memory than its arithmetic.
+#if HUBWIRE_CX_REMEMBERS
+#define HUBWIRE_FNV(h, i) (((h) ^ (uint32_t)(uint8_t)P::at(i)) * 0x01000193UL)
+#else
+#define HUBWIRE_FNV(h, i) (((h) ^ (uint32_t)(uint8_t)partChar<P>(i)) * 0x01000193UL)
+#endif
 template <typename P>
 constexpr uint32_t fnvPart(uint32_t h, size_t i = 0) {
   return i + 8 <= sizeof(Chars<P>)
-             ? fnvPart<P>(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(fnv1a(h, (uint8_t)partChar<P>(i)), (uint8_t)partChar<P>(i + 1)),
-                                                               (uint8_t)partChar<P>(i + 2)), (uint8_t)partChar<P>(i + 3)),
-                                                 (uint8_t)partChar<P>(i + 4)), (uint8_t)partChar<P>(i + 5)), (uint8_t)partChar<P>(i + 6)),
-                                 (uint8_t)partChar<P>(i + 7)),
+             ? fnvPart<P>(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(
+                              h, i), i + 1), i + 2), i + 3), i + 4), i + 5), i + 6), i + 7),
                           i + 8)
-         : i < sizeof(Chars<P>) ? fnvPart<P>(fnv1a(h, (uint8_t)partChar<P>(i)), i + 1)
-                           : h;
+         : i < sizeof(Chars<P>) ? fnvPart<P>(HUBWIRE_FNV(h, i), i + 1)
+                                : h;
 }
+#undef HUBWIRE_FNV
 template <typename D, const D* Decls, size_t K>
 struct HashAfter {  // the hash of parts 0..K-1
   static constexpr uint32_t value = fnvPart<typename PartAt<D, Decls, K - 1>::Type>(HashAfter<D, Decls, K - 1>::value);
@@ -329,50 +337,6 @@ template <typename D, const D* Decls>
 constexpr uint32_t hashOfText() {
   return HashAfter<D, Decls, builtParts<D, Decls>()>::value;
 }
-
-// ---- the descriptor as one message for sha256.h: the parts joined as a balanced tree, so that
-// reading a character goes log2(parts) levels deep ----
-template <typename P>
-struct PartMessage {
-  static constexpr size_t length() { return sizeof(Chars<P>); }  // a constant: clang would work out P::length() anew
-  static constexpr char at(size_t i) { return partChar<P>(i); }
-};
-template <typename D, const D* Decls, size_t Lo, size_t Hi, bool One = Hi - Lo == 1>
-struct Parts : sha256::Concat<Parts<D, Decls, Lo, (Lo + Hi) / 2>, Parts<D, Decls, (Lo + Hi) / 2, Hi> > {};
-template <typename D, const D* Decls, size_t Lo, size_t Hi>
-struct Parts<D, Decls, Lo, Hi, true> : PartMessage<typename PartAt<D, Decls, Lo>::Type> {};
-template <typename D, const D* Decls>
-struct DescriptorMessage : Parts<D, Decls, 0, builtParts<D, Decls>()> {};
-
-// Hello's fixed fields (bytes 6..15: the payload the device accepts, its heartbeat interval, the
-// descriptor's hash and length, little-endian), then the first kDigestSize bytes of the JSON's
-// SHA-256 (hello 16..31), then the JSON: hello copies its fixed part from flash in one piece,
-// found at json - kDigestSize - kHelloFixed.
-struct HelloFixed {
-  uint8_t bytes[kHelloFixed];
-};
-constexpr HelloFixed helloFixed(uint16_t length, uint32_t hash) {
-  return HelloFixed{{(uint8_t)HUBWIRE_MAX_PAYLOAD, (uint8_t)(HUBWIRE_MAX_PAYLOAD >> 8), (uint8_t)HUBWIRE_HEARTBEAT_MS,
-                     (uint8_t)(HUBWIRE_HEARTBEAT_MS >> 8), (uint8_t)hash, (uint8_t)(hash >> 8), (uint8_t)(hash >> 16),
-                     (uint8_t)(hash >> 24), (uint8_t)length, (uint8_t)(length >> 8)}};
-}
-template <typename D, const D* Decls>
-struct JsonAndDigest {
-  HelloFixed hello;
-  sha256::Digest<kDigestSize> digest;
-  JsonText<D, Decls> text;
-};
-// value is constexpr where it is declared, so it is a member of a class of its own: a class cannot
-// hold a constexpr object of its own, still incomplete, type.
-template <typename D, const D* Decls>
-struct Json {
-  typedef JsonAndDigest<D, Decls> Stored;
-  static constexpr Stored value = {helloFixed((uint16_t)sizeof(JsonText<D, Decls>), hashOfText<D, Decls>()),
-                                   sha256::digest<DescriptorMessage<D, Decls>, kDigestSize>(),
-                                   TextConst<D, Decls>::value};
-};
-template <typename D, const D* Decls>
-constexpr typename Json<D, Decls>::Stored Json<D, Decls>::value;
 
 }  // namespace declare
 }  // namespace hubwire

@@ -11,6 +11,7 @@
 
 #include "../wire/sha256.h"
 #include "constexpr_text.h"
+#include "descriptor_digest.h"
 #include "descriptor_text.h"
 
 namespace hubwire {

@@ -11,6 +11,7 @@
 #include "../wire/messages.h"
 #include "channel.h"
 #include "constexpr_text.h"
+#include "descriptor_digest.h"
 #include "descriptor_text.h"
 #include "dsl.h"
 

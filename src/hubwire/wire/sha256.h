@@ -13,7 +13,7 @@
 // is a constant of its own (State<Msg, k>::value), so no single constant evaluation covers more than
 // one block (64 rounds deep), and the chain of blocks is one template instantiation a block (257 for
 // 16 KiB, under the 900 of GCC and the 1024 of clang: GCC 5.4 stops at about 56 KB). What it costs
-// the compiler: bench/sha256-compile.sh (avr-g++ 5.4 keeps about 0.8 MB a block until the end).
+// the compiler: bench/sha256-compile.sh (avr-g++ 5.4 keeps about 0.7 MB a block until the end).
 #ifndef HUBWIRE_WIRE_SHA256_H
 #define HUBWIRE_WIRE_SHA256_H
 
@@ -67,6 +67,10 @@ namespace detail {
 struct Words {
   uint32_t h[8];
 };
+// A block's sixteen message words, two to a 64-bit element (the first in the high half).
+struct Block {
+  uint64_t p[8];
+};
 
 // The round constants, as a chain of conditionals: GCC 5 copied a constexpr array whole at every
 // read of one element (2 KB a round).
@@ -114,54 +118,100 @@ constexpr uint8_t paddedByte(size_t i) {
              ? (uint8_t)0
              : lengthByte(Msg::length(), blockCount(Msg::length()) * 64 - 1 - i);
 }
+// A word of the padded message. One call a word where the message is read a word at a time (each
+// constexpr call costs GCC 5 memory it keeps): Msg::word() is called from here directly.
+template <typename Msg, typename = void>
+struct PaddedWord {
+  static constexpr uint32_t at(size_t i) {
+    return i + 4 <= Msg::length() ? bytesWord<Msg>(i)
+         : (uint32_t)paddedByte<Msg>(i) << 24 | (uint32_t)paddedByte<Msg>(i + 1) << 16 |
+           (uint32_t)paddedByte<Msg>(i + 2) << 8 | (uint32_t)paddedByte<Msg>(i + 3);
+  }
+};
 template <typename Msg>
-constexpr uint32_t messageWord(size_t i) {
-  return WordOf<Msg>::at(i);
-}
-template <typename Msg>
-constexpr uint32_t paddedWord(size_t i) {
-  return i + 4 <= Msg::length() ? messageWord<Msg>(i)
-       : (uint32_t)paddedByte<Msg>(i) << 24 | (uint32_t)paddedByte<Msg>(i + 1) << 16 |
-         (uint32_t)paddedByte<Msg>(i + 2) << 8 | (uint32_t)paddedByte<Msg>(i + 3);
-}
+struct PaddedWord<Msg, decltype((void)Msg::word(0))> {
+  static constexpr uint32_t at(size_t i) {
+    return i + 4 <= Msg::length() ? Msg::word(i)
+         : (uint32_t)paddedByte<Msg>(i) << 24 | (uint32_t)paddedByte<Msg>(i + 1) << 16 |
+           (uint32_t)paddedByte<Msg>(i + 2) << 8 | (uint32_t)paddedByte<Msg>(i + 3);
+  }
+};
 
 // ---- one block: 64 rounds, one call each (64 deep), round t a function of its own with its
 // constant folded in (Round<t>::K). The working variables a..h and the schedule's window W[t..t+15]
-// are 24 word parameters, not an aggregate, and T1 is written out twice rather than passed through
-// a call of its own: GCC 5 keeps every constexpr call's arguments until the end of the file, so
-// fewer and smaller calls are what keeps its memory down. W[t+16] is made while round t runs. ----
+// are word parameters, not an aggregate, and T1 is written out twice rather than passed through a
+// call of its own: GCC 5 keeps every constexpr call's arguments until the end of the file, so fewer
+// and smaller calls are what keeps its memory down. For the same reason the window travels as pairs
+// of words in 64-bit parameters (16 or 17 parameters a round, not 24): an even round takes eight
+// pairs, an odd one its own word, seven pairs and the window's last word, so that every pair passes
+// on unchanged and one new pair is made every other round. W[t+16] is made while round t runs. ----
+#define HUBWIRE_SHA_HI(p) ((uint32_t)((p) >> 32))
+#define HUBWIRE_SHA_LO(p) ((uint32_t)(p))
+#define HUBWIRE_SHA_PAIR(x, y) ((uint64_t)(x) << 32 | (y))
+#define HUBWIRE_SHA_T1(e, f, g, h, w) (h + HUBWIRE_SHA_S1(e) + ((e & f) ^ (~e & g)) + K + (w))
+#define HUBWIRE_SHA_T2(a, b, c) (HUBWIRE_SHA_S0(a) + ((a & b) ^ (a & c) ^ (b & c)))
+template <unsigned T, bool Odd = T % 2 == 1>
+struct Round;
+// Even rounds: the schedule's window as eight pairs of words.
 template <unsigned T>
-struct Round {
+struct Round<T, false> {
   static constexpr uint32_t K = roundConstant(T);
   static constexpr Words run(uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f, uint32_t g,
-                             uint32_t h, uint32_t w0, uint32_t w1, uint32_t w2, uint32_t w3, uint32_t w4, uint32_t w5,
-                             uint32_t w6, uint32_t w7, uint32_t w8, uint32_t w9, uint32_t w10, uint32_t w11,
-                             uint32_t w12, uint32_t w13, uint32_t w14, uint32_t w15) {
-    return Round<T + 1>::run(h + HUBWIRE_SHA_S1(e) + ((e & f) ^ (~e & g)) + K + w0 +  // T1
-                                 HUBWIRE_SHA_S0(a) + ((a & b) ^ (a & c) ^ (b & c)),   // + T2
-                             a, b, c,
-                             d + h + HUBWIRE_SHA_S1(e) + ((e & f) ^ (~e & g)) + K + w0,  // d + T1
-                             e, f, g, w1, w2, w3, w4, w5, w6, w7, w8, w9, w10, w11, w12, w13, w14, w15,
-                             HUBWIRE_SHA_s1(w14) + w9 + HUBWIRE_SHA_s0(w1) + w0);
+                             uint32_t h, uint64_t p01, uint64_t p23, uint64_t p45, uint64_t p67, uint64_t p89,
+                             uint64_t p1011, uint64_t p1213, uint64_t p1415) {
+    return Round<T + 1>::run(HUBWIRE_SHA_T1(e, f, g, h, HUBWIRE_SHA_HI(p01)) + HUBWIRE_SHA_T2(a, b, c), a, b, c,
+                             d + HUBWIRE_SHA_T1(e, f, g, h, HUBWIRE_SHA_HI(p01)), e, f, g, HUBWIRE_SHA_LO(p01), p23,
+                             p45, p67, p89, p1011, p1213, p1415,
+                             HUBWIRE_SHA_s1(HUBWIRE_SHA_HI(p1415)) + HUBWIRE_SHA_LO(p89) +
+                                 HUBWIRE_SHA_s0(HUBWIRE_SHA_LO(p01)) + HUBWIRE_SHA_HI(p01));
+  }
+};
+// Odd rounds: its word alone, seven pairs, and the window's last word alone.
+template <unsigned T>
+struct Round<T, true> {
+  static constexpr uint32_t K = roundConstant(T);
+  static constexpr Words run(uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f, uint32_t g,
+                             uint32_t h, uint32_t w0, uint64_t p12, uint64_t p34, uint64_t p56, uint64_t p78,
+                             uint64_t p910, uint64_t p1112, uint64_t p1314, uint32_t w15) {
+    return Round<T + 1>::run(HUBWIRE_SHA_T1(e, f, g, h, w0) + HUBWIRE_SHA_T2(a, b, c), a, b, c,
+                             d + HUBWIRE_SHA_T1(e, f, g, h, w0), e, f, g, p12, p34, p56, p78, p910, p1112, p1314,
+                             HUBWIRE_SHA_PAIR(w15, HUBWIRE_SHA_s1(HUBWIRE_SHA_LO(p1314)) + HUBWIRE_SHA_HI(p910) +
+                                                       HUBWIRE_SHA_s0(HUBWIRE_SHA_HI(p12)) + w0));
   }
 };
 template <unsigned T>
-constexpr uint32_t Round<T>::K;
+constexpr uint32_t Round<T, false>::K;
+template <unsigned T>
+constexpr uint32_t Round<T, true>::K;
 template <>
-struct Round<64> {
+struct Round<64, false> {
   static constexpr Words run(uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e, uint32_t f, uint32_t g,
-                             uint32_t h, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t,
-                             uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t) {
+                             uint32_t h, uint64_t, uint64_t, uint64_t, uint64_t, uint64_t, uint64_t, uint64_t,
+                             uint64_t) {
     return Words{{a, b, c, d, e, f, g, h}};
   }
 };
+// A block's sixteen words, in pairs: from Msg::block() where the message has it (Parts in
+// descriptor_digest.h: one descent of its tree a block, not one a word) and the block holds no padding,
+// else a word at a time.
+#define HUBWIRE_SHA_W(i) HUBWIRE_SHA_PAIR(PaddedWord<Msg>::at(at + 8 * i), PaddedWord<Msg>::at(at + 8 * i + 4))
 template <typename Msg>
-constexpr Words blockRounds(const Words& h, size_t at) {
-  return Round<0>::run(h.h[0], h.h[1], h.h[2], h.h[3], h.h[4], h.h[5], h.h[6], h.h[7], paddedWord<Msg>(at),
-                paddedWord<Msg>(at + 4), paddedWord<Msg>(at + 8), paddedWord<Msg>(at + 12), paddedWord<Msg>(at + 16),
-                paddedWord<Msg>(at + 20), paddedWord<Msg>(at + 24), paddedWord<Msg>(at + 28), paddedWord<Msg>(at + 32),
-                paddedWord<Msg>(at + 36), paddedWord<Msg>(at + 40), paddedWord<Msg>(at + 44), paddedWord<Msg>(at + 48),
-                paddedWord<Msg>(at + 52), paddedWord<Msg>(at + 56), paddedWord<Msg>(at + 60));
+constexpr Block paddedBlock(size_t at) {
+  return Block{{HUBWIRE_SHA_W(0), HUBWIRE_SHA_W(1), HUBWIRE_SHA_W(2), HUBWIRE_SHA_W(3), HUBWIRE_SHA_W(4),
+                HUBWIRE_SHA_W(5), HUBWIRE_SHA_W(6), HUBWIRE_SHA_W(7)}};
+}
+#undef HUBWIRE_SHA_W
+template <typename Msg, typename = void>
+struct BlockOf {
+  static constexpr Block at(size_t i) { return paddedBlock<Msg>(i); }
+};
+template <typename Msg>
+struct BlockOf<Msg, decltype((void)Msg::block(0))> {
+  static constexpr Block at(size_t i) { return i + 64 <= Msg::length() ? Msg::block(i) : paddedBlock<Msg>(i); }
+};
+constexpr Words blockRounds(const Words& h, const Block w) {
+  return Round<0>::run(h.h[0], h.h[1], h.h[2], h.h[3], h.h[4], h.h[5], h.h[6], h.h[7], w.p[0], w.p[1], w.p[2],
+                       w.p[3], w.p[4], w.p[5], w.p[6], w.p[7]);
 }
 constexpr Words add(const Words& h, const Words& v) {
   return Words{{h.h[0] + v.h[0], h.h[1] + v.h[1], h.h[2] + v.h[2], h.h[3] + v.h[3], h.h[4] + v.h[4],
@@ -169,7 +219,7 @@ constexpr Words add(const Words& h, const Words& v) {
 }
 template <typename Msg>
 constexpr Words compress(const Words& h, size_t block) {
-  return add(h, blockRounds<Msg>(h, block * 64));
+  return add(h, blockRounds(h, BlockOf<Msg>::at(block * 64)));
 }
 
 // The state after the first K blocks: each a constant of its own, evaluated once. Defined below as
@@ -220,5 +270,10 @@ constexpr Digest<N> digest() {
 #undef HUBWIRE_SHA_S1
 #undef HUBWIRE_SHA_s0
 #undef HUBWIRE_SHA_s1
+#undef HUBWIRE_SHA_HI
+#undef HUBWIRE_SHA_LO
+#undef HUBWIRE_SHA_PAIR
+#undef HUBWIRE_SHA_T1
+#undef HUBWIRE_SHA_T2
 
 #endif
