@@ -186,3 +186,13 @@ def test_refusals_are_said_in_plain_words() -> None:
         text, name = outcome(NakError(int(code), "x"))
         assert name == code.name and code.name not in text and "NAK" not in text, text
     assert set(NAK_WORDS) == {c.name for c in NakCode}
+
+
+def test_number_fields_say_the_range_in_words() -> None:
+    """A number field shows the declared range in its label or placeholder, never as NiceGUI's
+    min/max, which clamp a typed value (test_serve_dashboard_missions: 20 typed stays 20)."""
+    from hubwire.dashboard.model import range_hint
+    from hubwire.descriptor import parse_descriptor
+    d = parse_descriptor(b'{"p":1,"n":"b","ch":[{"id":1,"n":"a","t":"f32","a":"rw","min":0.5,"max":10},'
+                         b'{"id":2,"n":"c","t":"i16","a":"rw","min":-3},{"id":3,"n":"e","t":"u8","a":"rw"}]}')
+    assert [range_hint(ch) for ch in d.channels] == ["0.5 to 10", "from -3", ""]

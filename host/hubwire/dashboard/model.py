@@ -43,6 +43,17 @@ def is_integer(ch: Channel) -> bool:
     return bool(ch.codec.scalar) and str(ch.codec.scalar)[0] in "ui"
 
 
+def range_hint(ch: Channel) -> str:
+    """The declared range in words, for a number field's label or placeholder. The field itself gets
+    no min/max: NiceGUI clamps what was typed to them when the field loses focus, so 20 typed where
+    10 is the maximum would be written or started as 10 without a word; out of range, the hub
+    refuses it and says why."""
+    lo, hi = (None if b is None else fmt_value(b) for b in (ch.min, ch.max))
+    if lo is not None and hi is not None:
+        return f"{lo} to {hi}"
+    return f"from {lo}" if lo is not None else f"up to {hi}" if hi is not None else ""
+
+
 def plottable(ch: Channel) -> bool:
     """A channel with numbers in it (scalars, arrays, structs of numbers) that can be read or streamed."""
     if not (ch.readable or ch.streamable) or ch.codec.kind in ("str", "void"):

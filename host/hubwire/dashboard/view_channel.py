@@ -18,7 +18,7 @@ from ..descriptor import Channel
 from ..errors import HubwireError
 from .attrs import tag
 from .feed import BoardFeed
-from .model import ChannelRecord, fmt_value, is_integer, plottable, widget_for
+from .model import ChannelRecord, fmt_value, is_integer, plottable, range_hint, widget_for
 from .words import outcome
 
 __all__ = ["ChannelRow", "ActionRow", "channel_rows"]
@@ -133,8 +133,10 @@ class InputBox:
                 .props("label dense").classes("w-36 shrink-0")
             self.el.on("change", lambda: self._apply(self.el.value))
         elif self.kind == "number":
-            self.el = ui.number(value=start if isinstance(start, (int, float)) else None, min=ch.min, max=ch.max,
+            self.el = ui.number(value=start if isinstance(start, (int, float)) else None,
                                 format="%d" if is_integer(ch) else None).props("dense").classes("w-24 shrink-0")
+            if range_hint(ch):  # a number field has at most one bound here (both: a slider)
+                self.el.props["placeholder"] = range_hint(ch)
         else:
             self.el = ui.input(value="" if start is None else (start if isinstance(start, str) else json.dumps(start))) \
                 .props("dense").classes("w-32 shrink-0")

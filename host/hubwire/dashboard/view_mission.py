@@ -22,7 +22,7 @@ from ..daemon.mission_ops import outcome_json
 from ..daemon.mission_runs import MissionRuns, RunEntry, runs_of
 from .attrs import tag
 from .feed import BoardFeed, outcome_text
-from .model import fmt_value, is_integer
+from .model import fmt_value, is_integer, range_hint
 
 __all__ = ["MissionView"]
 
@@ -46,8 +46,9 @@ class MissionView:
                 if ch.codec.kind != "void":
                     label = f"goal ({ch.codec.name}{self.unit.rstrip()})"
                     if _numeric(ch.codec):
-                        self.goal = ui.number(label=label, min=ch.min, max=ch.max,
-                                              format="%d" if is_integer(ch) else None).classes("w-40")
+                        if range_hint(ch):
+                            label = f"{label[:-1]}, {range_hint(ch)})"
+                        self.goal = ui.number(label=label, format="%d" if is_integer(ch) else None).classes("w-48")
                     else:
                         self.goal = ui.input(label=label + ", as JSON").classes("w-64")
                     tag(self.goal, "dense", goal=a)

@@ -40,9 +40,12 @@ def test_start_progress_cancel_and_result_in_the_browser(boards_dir: str, tmp_pa
             wait_text(page, sel("run", M), "^no run yet$")
             # a goal outside the declared range is refused by the hub; nothing starts
             serve.cli("set", "missions", "speed", "2")
-            field(page, "goal", M).fill("20")
+            goal = field(page, "goal", M)
+            goal.fill("20")
+            goal.press("Tab")  # the field loses focus first, as when the user moves to the button
             page.locator(sel("start", M)).click()
             wait_text(page, sel("mission-error", M), r"outside the declared range")
+            assert goal.input_value() == "20"  # what was typed stays (never clamped to the range)
             # a drive of 1 m: the bar fills, the result shows
             field(page, "goal", M).fill("1")
             page.locator(sel("start", M)).click()
