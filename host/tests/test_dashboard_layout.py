@@ -174,7 +174,8 @@ def test_a_lost_board_shows_stale_values_and_disabled_controls_then_comes_back(p
     at_width(page, 1366, 768)
     rover.stop()  # the board goes away with its port
     try:
-        wait_text(page, sel("state", "rover"), "^lost$")
+        # lost (silent for 4 heartbeats) or unplugged (its port gone): whichever the hub notices first
+        wait_text(page, sel("state", "rover"), "^(lost|unplugged)$")
         page.wait_for_function("s => document.querySelector(s).dataset.hwStale === '1'",
                                arg=sel("value", "rover.battery"), timeout=WAIT_MS)
         page.wait_for_function(f"s => ({DISABLED_JS})(s).every(x => x)", arg=CONTROLS, timeout=WAIT_MS)
