@@ -64,6 +64,9 @@ mount -t proc proc "$DIR/proc" && mounts+=("$DIR/proc")
 mount --bind /dev "$DIR/dev" && mounts+=("$DIR/dev")
 mount --bind /dev/pts "$DIR/dev/pts" && mounts+=("$DIR/dev/pts")
 cp -L /etc/resolv.conf "$DIR/etc/resolv.conf"
+# debootstrap writes no /etc/hosts (the Debian installer and Raspberry Pi OS do): without it
+# "localhost" does not resolve, which no user's machine lacks
+[ -s "$DIR/etc/hosts" ] || printf '127.0.0.1\tlocalhost\n::1\t\tlocalhost ip6-localhost ip6-loopback\n' >"$DIR/etc/hosts"
 [ -z "${SSL_CERT_DIR:-}" ] || bind_ro "$SSL_CERT_DIR"
 for v in SSL_CERT_FILE PIP_CERT REQUESTS_CA_BUNDLE PIP_FIND_LINKS; do
   p=${!v:-}
