@@ -20,6 +20,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 
 import serial
 from cobs import cobs
@@ -139,6 +140,21 @@ class PacketSerialLink(Link):
             return None
         frame, self.buf = self.buf.split(b"\0", 1)
         return cobs.decode(frame)
+
+def led_then_presses(uno: Uno, led: Callable[[bool], bool], press: Callable[..., bytes | None],
+                     pressed: Callable[[int], bytes]) -> None:
+    """The tail every peer's Minimal-shaped sketch shares: `led` off then on (answered, the LED
+    follows), then two presses reported with their count and the releases not reported."""
+    claim("led off answered", led(False))
+    stays_off(uno, "led off: no blinking")
+    claim("led on answered", led(True))
+    blinks_every(uno, 100, "blinks again")
+    for n in (1, 2):
+        uno.button()
+        claim(f"press {n} reported", press() == pressed(n))
+        uno.button()
+        time.sleep(0.1)  # the sketch sees the release before the next press
+    claim("release not reported", press(0.5) is None)
 
 
 def crc8_table() -> list[int]:
@@ -276,16 +292,7 @@ def check_packetserial(uno: Uno) -> None:
     claim("read back 100", link.ask(b"r") == b"v" + (100).to_bytes(2, "little"))
     blinks_every(uno, 100, "blinks every 100 ms")
     claim("unknown packet refused", link.ask(b"x") == b"n")
-    claim("led off answered", link.ask(b"l\x00") == b"a")
-    stays_off(uno, "led off: no blinking")
-    claim("led on answered", link.ask(b"l\x01") == b"a")
-    blinks_every(uno, 100, "blinks again")
-    for n in (1, 2):
-        uno.button()
-        claim(f"press {n} reported", link.recv() == b"b" + bytes([n]))
-        uno.button()
-        time.sleep(0.1)  # the sketch sees the release before the next press
-    claim("release not reported", link.recv(0.5) is None)
+    led_then_presses(uno, lambda on: link.ask(b"l" + bytes([on])) == b"a", link.recv, lambda n: b"b" + bytes([n]))
 
 
 def check_serialtransfer(uno: Uno) -> None:
@@ -305,16 +312,7 @@ def check_serialtransfer(uno: Uno) -> None:
     blinks_every(uno, 100, "blinks every 100 ms")
     link.uno.port.write(bytes([0x7E, 1, 0xFF, 2, 100, 0, 0x00, 0x81]))  # a wrong CRC
     claim("damaged packet not answered", link.recv(0.5) is None)
-    claim("led off answered", ask(2, b"\0") == b"\2\1")
-    stays_off(uno, "led off: no blinking")
-    claim("led on answered", ask(2, b"\1") == b"\2\1")
-    blinks_every(uno, 100, "blinks again")
-    for n in (1, 2):
-        uno.button()
-        claim(f"press {n} reported", link.recv() == b"\3" + bytes([n]))
-        uno.button()
-        time.sleep(0.1)  # the sketch sees the release before the next press
-    claim("release not reported", link.recv(0.5) is None)
+    led_then_presses(uno, lambda on: ask(2, bytes([on])) == b"\2\1", link.recv, lambda n: b"\3" + bytes([n]))
 
 
 def check_firmata(uno: Uno) -> None:
@@ -373,18 +371,11 @@ def check_rosserial(uno: Uno) -> None:
             got.append(m)
         claim(name, got[-1:] == [le(now)], got)
     blinks_every(uno, 100, "blinks every 100 ms")
-    link.send_to(led, b"\0")
-    claim("led off answered", link.next_on(led_answer) == b"\1" + bytes(4))  # success, message ""
-    stays_off(uno, "led off: no blinking")
-    link.send_to(led, b"\1")
-    claim("led on answered", link.next_on(led_answer) == b"\1" + bytes(4))
-    blinks_every(uno, 100, "blinks again")
-    for n in (1, 2):
-        uno.button()
-        claim(f"press {n} reported", link.next_on(button) == bytes([n]))
-        uno.button()
-        time.sleep(0.1)
-    claim("release not reported", link.next_on(button, 0.5) is None)
+
+    def switch(on: bool) -> bool:
+        link.send_to(led, bytes([on]))
+        return link.next_on(led_answer) == b"\1" + bytes(4)  # success, message ""
+    led_then_presses(uno, switch, lambda t=3.0: link.next_on(button, t), lambda n: bytes([n]))
 
 
 def check_telemetrix(uno: Uno) -> None:
