@@ -2,9 +2,10 @@
 hub, exactly-once device writes and calls, hub events in order, the hub's descriptor, health."""
 from __future__ import annotations
 
+import contextlib
 import struct
 import threading
-from typing import Any, List
+from typing import Any, Iterator, List, Tuple
 
 import pytest
 
@@ -241,16 +242,24 @@ def test_device_write_retried_is_applied_once() -> None:
         assert calls == [7, 7]
 
 
-def test_slow_handler_answers_once_when_done() -> None:
+@contextlib.contextmanager
+def slow_dock(hold: float) -> Iterator[Tuple[HubDevice, hubwire.Device, threading.Event, List[float]]]:
+    """The hub action `dock` (channel 3), bound by the device; its handler records the speed, then
+    holds until the gate is set (at most `hold` s)."""
     gate = threading.Event()
     calls: List[float] = []
     with HubDevice() as dev, connect(dev) as d:
         @d.action("dock")
         def dock(speed: float) -> bool:
             calls.append(speed)
-            gate.wait(2)
+            gate.wait(hold)
             return True
         assert wait_for(lambda: dev.binds and dev.binds[-1][3] == 0)
+        yield dev, d, gate, calls
+
+
+def test_slow_handler_answers_once_when_done() -> None:
+    with slow_dock(2) as (dev, _, gate, calls):
         threading.Timer(0.35, gate.set).start()
         a = dev.ask(m.CONTROL, 3, f32(2.0))  # retried while the handler runs: not run again
         assert a is not None and a.payload == b"\x01" and calls == [2.0]
@@ -260,15 +269,7 @@ def test_an_answer_the_device_gave_up_on_is_not_sent_late() -> None:
     """The device's own R, C, J go one at a time (PROTOCOL.md 4.4): once it sends a newer one it has
     given up on the earlier one, so a slow handler's answer to that one is dropped, not sent late,
     where (the device's counter having come round) it could meet a newer request of its seq and id."""
-    gate = threading.Event()
-    calls: List[float] = []
-    with HubDevice() as dev, connect(dev) as d:
-        @d.action("dock")
-        def dock(speed: float) -> bool:
-            calls.append(speed)
-            gate.wait(10)
-            return True
-        assert wait_for(lambda: dev.binds and dev.binds[-1][3] == 0)
+    with slow_dock(10) as (dev, d, gate, calls):
         assert dev.ask(m.CONTROL, 3, f32(2.0), tries=2) is None  # the device gives up meanwhile
         seq = dev._seq
         assert wait_for(lambda: calls == [2.0])
