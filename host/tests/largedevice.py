@@ -44,7 +44,9 @@ class LargeDevice(PtyPeer):
     action's name to the Python function it runs (decoded argument in, value out)."""
 
     def __init__(self, channels: Optional[List[Dict[str, Any]]] = None, max_payload: int = 32) -> None:
-        super().__init__(max_payload)
+        # A heartbeat a second (loss after 4 s): these tests are about values, not the link, and a
+        # scripted device shares the test's process, which a loaded machine may stall for a second.
+        super().__init__(max_payload, beat_ms=1000)
         self.descriptor = descriptor(channels)
         self.desc = parse_descriptor(self.descriptor)
         self.values: Dict[int, bytes] = {}
@@ -108,7 +110,7 @@ class LargeDevice(PtyPeer):
             f = whole
         if f.type == m.HELLO:
             if not m.Hello.unpack(f.payload).is_reply:
-                h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_SEQ_RULES | m.FLAG_REPLY, 0x2468ACE, self.max_payload, 250,
+                h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_SEQ_RULES | m.FLAG_REPLY, 0x2468ACE, self.max_payload, self.beat_ms,
                             m.fnv1a32(self.descriptor), len(self.descriptor))
                 self.send(m.HELLO, 0, 0, h.pack())
         elif f.type == m.CHUNK:

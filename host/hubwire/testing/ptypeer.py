@@ -1,6 +1,6 @@
 """A scripted peer on a pty: the base of test devices written in Python (the hub-channel soak's
 device, the tests' scripted devices). A thread reads frames and hands each to ``handle``; once
-``linked`` it sends a heartbeat every ``beat`` seconds (``since_ms`` 0 first, then ``beat_ms``)."""
+``linked`` it sends a heartbeat every ``beat_ms`` (``since_ms`` 0 first, then ``beat_ms``)."""
 from __future__ import annotations
 
 import os
@@ -78,7 +78,7 @@ class PtyPeer:
                     self.linked = self.linked or f.type == m.HELLO
                     self.handle(f)
             self.tick()
-            if self.linked and time.monotonic() - beat >= 0.25:
+            if self.linked and time.monotonic() - beat >= self.beat_ms / 1000:
                 n += 1
                 self.send(m.HEARTBEAT, n & 0xFF, 0, m.Heartbeat(n, 0 if n == 1 else self.beat_ms, 0, 0, 0).pack())
                 beat = time.monotonic()
