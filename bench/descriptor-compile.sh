@@ -117,6 +117,35 @@ for d in "${sweep[@]}"; do
   if [ -n "${A[20-$d]:-}" ]; then S[$d]=${A[20-$d]}; else S[$d]=$(avr_unit 20 "$d"); fi
 done
 
+# The same 32 x 60 compile with less address space: GCC collects its garbage sooner (below).
+lows=(200 150 128 112)
+declare -A L
+for l in "${lows[@]}"; do L[$l]=$(limit=$l avr_unit 32 60); done
+# ... and with GCC told to collect at every point it may (what the compile really holds at once).
+eager_flags=(--param ggc-min-heapsize=4096 --param ggc-min-expand=0)
+eager=$(measure avr-32-60-eager "${avr[@]}" "${eager_flags[@]}" "$(max 32)" -I"$tree/src" -x c++ "$(sketch 32 60)" -o "$out/avr.o")
+# With -Q GCC names each function it compiles and prints "{GC before -> after}" at each collection:
+# the heap allocated between two of the macro's collection points is what that step cost.
+"${avr[@]}" "${eager_flags[@]}" -Q "$(max 32)" -I"$tree/src" -x c++ "$(sketch 32 60)" -o "$out/avr.o" 2>"$out/avr-32-60-steps.log"
+steps=$(python3 - "$out/avr-32-60-steps.log" <<'PY'
+import re, sys
+text = open(sys.argv[1], errors="replace").read()
+parts = re.split(r"\{GC (\d+)k -> (\d+)k\}", text)
+kinds = {"headers, declarations and their report": 0.0, "the parts' lengths and the characters (TextStep)": 0.0,
+         "FNV-1a (HashStep)": 0.0, "SHA-256 (DigestStep)": 0.0, "the flash tables and their checks": 0.0}
+names = list(kinds)
+kind, prev = 0, 0
+for i in range((len(parts) - 1) // 3):
+    before, after = int(parts[3 * i + 1]), int(parts[3 * i + 2])
+    kinds[names[kind]] += (before - prev) / 1024
+    prev = after
+    step = re.findall(r"hubwire_collect_(reported|TextStep8|HashStep8|DigestStep8)\(\)", parts[3 * i][-300:])
+    if step:
+        kind = min(kind + 1, len(names) - 1)
+print(", ".join(f"{k} {v:.0f}" for k, v in kinds.items()))
+PY
+)
+
 {
   echo "# What the descriptor costs the compiler"
   echo
@@ -156,6 +185,28 @@ done
   echo "| description | JSON bytes | avr-g++ |"
   echo "| --- | --- | --- |"
   for d in "${sweep[@]}"; do echo "| $d | $(json_bytes 20 "$d") | $(cell "${S[$d]}") |"; done
+  echo
+  echo "## With less memory (avr-g++, 32 x 60)"
+  echo
+  echo "GCC collects its garbage only once its heap has grown past ggc-min-heapsize and then by"
+  echo "ggc-min-expand percent: on a machine with 1 GB of RAM or more 128 MB and 100 %, so a compile that"
+  echo "allocates less than 256 MB is never collected; with less RAM, or a limited address space (GCC reads"
+  echo "RLIMIT_AS), both are smaller. So the peak above is what GCC keeps when memory is plentiful, not what"
+  echo "the sketch needs. The same command, unchanged, under a smaller \`ulimit -v\` (as a container or a shell"
+  echo "with a limit sets it):"
+  echo
+  echo "| address-space limit | avr-g++ 32 x 60 |"
+  echo "| --- | --- |"
+  echo "| $limit MiB (as above) | $(cell "${A[32-60]}") |"
+  for l in "${lows[@]}"; do
+    IFS='|' read -r c m s <<<"${L[$l]}"
+    if [ "$s" = ok ]; then echo "| $l MiB | $m MiB / $c s |"; else echo "| $l MiB | does not build ($s) |"; fi
+  done
+  echo "| $limit MiB, GCC collecting at every point it may (\`--param ggc-min-heapsize=4096 --param ggc-min-expand=0\`, not an Arduino flag: what the compile holds at once) | $(cell "$eager") |"
+  echo
+  echo "The same flags with \`-Q\` print the heap before and after each collection and the functions"
+  echo "compiled between, so the heap each step of HUBWIRE_CHANNELS allocates (steps.h) can be added up."
+  echo "32 x 60, MB allocated (mostly garbage: collected, it leaves the 55 MiB above): $steps."
   cat <<'MD'
 
 ## Before this change (41b85b1, the same script)
