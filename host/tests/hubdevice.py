@@ -3,6 +3,7 @@ report and events (deduplicated by seq and id, as PROTOCOL.md asks of a device) 
 send device-side R / C / J with the device's retry rule (same seq every 100 ms). Test helper only."""
 from __future__ import annotations
 
+import os
 import threading
 import struct
 import time
@@ -14,7 +15,7 @@ from hubwire import HubChannels
 from hubwire.descriptor.cache import descriptor_digest
 from hubwire.wire import messages as m
 from hubwire.testing.ptypeer import PtyPeer
-from hubwire.wire.frame import Frame
+from hubwire.wire.frame import Frame, encode_frame
 
 HUB_LIST = (b'[{"id":1,"n":"setpoint","a":"r","t":"f32"},'
             b'{"id":2,"n":"report","a":"w","t":"struct","f":[{"n":"temp","t":"f32"},{"n":"heater","t":"bool"}]},'
@@ -59,10 +60,16 @@ class HubDevice(PtyPeer):
         #: every answer the hub sent to the device's own transactions, in arrival order
         self.answers_seen: List[Frame] = []
 
-    def _hello(self, reply: bool) -> None:
+    def _hello(self, reply: bool, times: int = 1) -> None:
         h = m.Hello(1, m.FLAG_DEVICE | m.FLAG_SEQ_RULES | (m.FLAG_REPLY if reply else 0), self.nonce, self.max_payload, 250,
                     m.fnv1a32(self.descriptor), len(self.descriptor), digest=descriptor_digest(self.descriptor))
-        self.send(m.HELLO, 0, 0, h.pack())
+        with self.lock:  # in one write: the hub reads them together
+            os.write(self.master, encode_frame(m.HELLO, 0, 0, h.pack()) * times)
+
+    def announce(self, times: int = 1) -> None:
+        """Announce itself as a device that lost the link does, ``times`` hellos at once (a backlog
+        held up on the line while it waited for the hub's answer)."""
+        self._hello(False, times)
 
     def reboot(self) -> None:
         """A new boot: a new nonce, duplicate detection forgotten, announced with a hello."""

@@ -51,6 +51,10 @@ HEARTBEAT_LEAD = 15 / 16
 PROBE_AFTER = 2
 #: ... and again every this many intervals until the link is lost or heard again
 PROBE_EVERY = 0.5
+#: a device announcement this many of the hub's intervals after the hub answered the last one left
+#: the device before that answer reached it (a backlog read at once): the same loss, answered again.
+#: A new loss comes later: the device declares one only after LOSS_HEARTBEATS silent intervals.
+ANNOUNCE_REPEAT = 2
 
 
 def new_nonce() -> int:
@@ -122,6 +126,8 @@ class Link:
         #: a device announcement was answered by asking for its hello again (PROTOCOL.md 7.1): its
         #: answer stands for the announcement
         self._announce_pending = False
+        #: when the hub last answered a device's announcement (ANNOUNCE_REPEAT)
+        self._answered_at: Optional[float] = None
         self._hello_timer: Optional[asyncio.TimerHandle] = None
         self._hb_timer: Optional[asyncio.TimerHandle] = None
         self._loss_timer: Optional[asyncio.TimerHandle] = None
@@ -364,8 +370,12 @@ class Link:
                 self.send_hello(reply=False)
                 self._announce_pending = True
                 return None
+            now = time.monotonic()
+            repeat = self._answered_at is not None and now - self._answered_at < ANNOUNCE_REPEAT * self.heartbeat_ms / 1000
+            self._answered_at = now
             self.send_hello(reply=True)
         else:
+            repeat = False
             self.owner.tx.hello_answered()
         announced, self._announce_pending = not h.is_reply or self._announce_pending, False
         prev, was_linked = self.device_hello, self.linked
@@ -394,7 +404,7 @@ class Link:
         if not was_linked:
             self._up()
             return HelloOutcome.RESTORED
-        if announced:
+        if announced and not repeat:
             self._up()
             return HelloOutcome.ANNOUNCE
         return HelloOutcome.SAME
