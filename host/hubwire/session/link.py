@@ -51,9 +51,8 @@ HEARTBEAT_LEAD = 15 / 16
 PROBE_AFTER = 2
 #: ... and again every this many intervals until the link is lost or heard again
 PROBE_EVERY = 0.5
-#: a device announcement this many of the hub's intervals after the hub answered the last one left
-#: the device before that answer reached it (a backlog read at once): the same loss, answered again.
-#: A new loss comes later: the device declares one only after LOSS_HEARTBEATS silent intervals.
+#: an announcement this many hub intervals after the hub answered the last one left before the
+#: answer reached the device: the same loss (a new one takes LOSS_HEARTBEATS silent intervals)
 ANNOUNCE_REPEAT = 2
 
 
@@ -126,8 +125,7 @@ class Link:
         #: a device announcement was answered by asking for its hello again (PROTOCOL.md 7.1): its
         #: answer stands for the announcement
         self._announce_pending = False
-        #: when the hub last answered a device's announcement (ANNOUNCE_REPEAT)
-        self._answered_at: Optional[float] = None
+        self._answered_at: Optional[float] = None  # the hub's last answer to an announcement
         self._hello_timer: Optional[asyncio.TimerHandle] = None
         self._hb_timer: Optional[asyncio.TimerHandle] = None
         self._loss_timer: Optional[asyncio.TimerHandle] = None
@@ -292,6 +290,11 @@ class Link:
         beat = self._peer_hb_ms / 1000.0
         silent = time.monotonic() - self.last_rx
         limit = self._loss_after()
+        if silent > limit:
+            self.transport.drain()  # held up by a long callback: what waits in the port is not silence
+            if self._loss_timer is not None or not self.linked or self.closed:
+                return  # what it read settled the link (a hello, a reboot)
+            silent = time.monotonic() - self.last_rx
         if silent > limit:
             self.owner.link_down(f"nothing heard for {silent * 1000:.0f} ms")
             return
