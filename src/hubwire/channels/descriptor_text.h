@@ -90,26 +90,34 @@ struct ChannelPart {
   // The value's text itself where it is written as it is (a name, unit or description without
   // escapes, a type name), else nullptr.
   static constexpr const char* plain(uint8_t k) {
-    return piece(k).kind == kLiteral || (piece(k).kind == kEscaped && cx::escapedLength(piece(k).text) == cx::length(piece(k).text))
+    return piece(k).kind == kLiteral || (piece(k).kind == kEscaped && cx::plainLength(piece(k).text) != cx::kNotPlain)
                ? piece(k).text
                : nullptr;
   }
   static constexpr size_t length() { return start(kPiecesPerChannel); }
-  static constexpr char charOf(uint8_t k, size_t j) {  // j-th character of piece k
-    return j < preLength(k)   ? pre(k)[j]
-         : j >= valueEnd(k)   ? post(k)[j - valueEnd(k)]
-         : plain(k)           ? plain(k)[j - preLength(k)]
-                              : declare::valueAt(piece(k), j - preLength(k));
+  // Where piece k's value and suffix start in the entry, and character i of the entry, in piece k:
+  // asked with i itself, not with its offset in the piece (one call and one start() less a character).
+  static constexpr size_t valueStart(uint8_t k) { return start(k) + preLength(k); }
+  static constexpr size_t postStart(uint8_t k) { return start(k) + valueEnd(k); }
+  static constexpr char charIn(uint8_t k, size_t i) {
+    return i < valueStart(k) ? pre(k)[i - start(k)]
+         : i >= postStart(k) ? post(k)[i - postStart(k)]
+         : plain(k)          ? plain(k)[i - valueStart(k)]
+                             : declare::valueAt(piece(k), i - valueStart(k));
   }
-  // The piece holding character i: the first from character i - 1's piece on that ends after i.
-  // Chars::make() asks the characters in order, so pieceOf(i - 1) is remembered: one start() asked
-  // for most characters (a binary search over the sixteen starts, one function, cost avr-g++ 5.4
-  // 2.8 KB a character; this 2.1).
+  // The piece holding character i. Chars::make() asks the characters in order, so character i - 1's
+  // is remembered: most characters lie in the same piece (one start() asked), the others in the
+  // first piece after it that ends after i (pieces may be empty). A binary search over the sixteen
+  // starts, one function, cost avr-g++ 5.4 2.8 KB a character; this 1.8.
   static constexpr uint8_t pieceFrom(uint8_t k, size_t i) {
     return i < start((uint8_t)(k + 1)) ? k : pieceFrom((uint8_t)(k + 1), i);
   }
-  static constexpr uint8_t pieceOf(size_t i) { return pieceFrom(i == 0 ? 0 : pieceOf(i - 1), i); }
-  static constexpr char at(size_t i) { return charOf(pieceOf(i), i - start(pieceOf(i))); }
+  static constexpr uint8_t pieceOf(size_t i) {
+    return i == 0 ? pieceFrom(0, 0)
+         : i < start((uint8_t)(pieceOf(i - 1) + 1)) ? pieceOf(i - 1)
+                                                    : pieceFrom((uint8_t)(pieceOf(i - 1) + 1), i);
+  }
+  static constexpr char at(size_t i) { return charIn(pieceOf(i), i); }
 };
 #else
 // Where calls are not remembered (GCC from 10 on, clang: constexpr_text.h), piece K of channel
