@@ -96,14 +96,16 @@ struct ChannelPart {
   }
   static constexpr size_t length() { return start(kPiecesPerChannel); }
   // Where piece k's value and suffix start in the entry, and character i of the entry, in piece k:
-  // asked with i itself, not with its offset in the piece (one call and one start() less a character).
+  // asked with i itself, not with its offset in the piece (one call and one start() less a
+  // character). The prefix and a value written as it is (most characters) in a small function, the
+  // rest in another: avr-g++ 5.4 paid for the rarer cases' arms at every character.
   static constexpr size_t valueStart(uint8_t k) { return start(k) + preLength(k); }
   static constexpr size_t postStart(uint8_t k) { return start(k) + valueEnd(k); }
   static constexpr char charIn(uint8_t k, size_t i) {
-    return i < valueStart(k) ? pre(k)[i - start(k)]
-         : i >= postStart(k) ? post(k)[i - postStart(k)]
-         : plain(k)          ? plain(k)[i - valueStart(k)]
-                             : declare::valueAt(piece(k), i - valueStart(k));
+    return i < valueStart(k) ? pre(k)[i - start(k)] : i < postStart(k) && plain(k) ? plain(k)[i - valueStart(k)] : restIn(k, i);
+  }
+  static constexpr char restIn(uint8_t k, size_t i) {
+    return i >= postStart(k) ? post(k)[i - postStart(k)] : declare::valueAt(piece(k), i - valueStart(k));
   }
   // The piece holding character i. Chars::make() asks the characters in order, so character i - 1's
   // is remembered: most characters lie in the same piece (one start() asked), the others in the
