@@ -281,6 +281,40 @@ call). The pairs cost g++ 12 about 2 MiB (137 to 139 for 32 x 60; 80 channels 2 
 the same kind of measurement: the characters (at(), pieceOf() and charOf(): about 35 MiB), the
 64 rounds a block (about 40), reading the message for them (8) and FNV-1a (5).
 
+## Then: avr-g++ 5.4, 32 x 60 from 167 to 148 MiB (the same script)
+
+Measured as above, a change and then 32 x 60 again (peak of three runs; the heap each macro step
+allocates with GCC collecting at every point it may). What this showed: inside the channel
+templates (ChannelPart, Parts, Decl), a constexpr function costs avr-g++ 5.4 at every call it works
+out for all its arms, also those the call does not take (a free function of the same shape does
+not: a test file of 2,000 calls with ten untaken calls in each cost nothing more). So a function
+asked at every character, block or piece is kept small, and its rarer cases are functions of their
+own. Each step, in order (MiB for 32 x 60):
+
+| step | avr-g++ 32 x 60 |
+| --- | --- |
+| before (36a9843) | 167 |
+| Decl::piece() as four functions of four pieces, not one of sixteen (the parts' lengths: 21.5 MB allocated, then 15.4) | 161 |
+| a character's piece found from the previous character's (remembered: Chars::make() asks them in order), not by a search over the sixteen starts | 155 |
+| a character asked with its own index (no call for its offset in the piece, pieceFrom() only past the previous character's piece), and a text's length without escapes in one walk (cx::plainLength: one call a character, not two) | 152 |
+| ChannelPart::charIn() holding only the prefix and a value written as it is, the suffix and the worked-out values (numbers, access letters) in restIn(); a block across two parts (Parts::across), a value's length for numbers and for texts, and FNV-1a's last characters (fnvTail), each apart | 148 |
+
+Where the 127 MB it still allocates go: 21 the headers, the declarations and their report, 14 the
+parts' lengths, 31 the characters (7 KB each), 3 FNV-1a, 45 SHA-256 (64 rounds of 16 or 17
+arguments a block) and 12 the tables after the digest (the records and the flash copies they point
+to: 6). g++ 12 and clang are unchanged (139 and 122 MiB). avr-g++ for 254 bare channels, where it
+collects between steps, 380 MiB became 325; the refusal of 254 x 60, 435 became 370.
+
+What did not help: the pieces as eight functions of two (15.2 MB for the lengths, against 15.4 for
+four of four); the lengths adding each piece's three parts in pieceStart() instead of calling
+pieceLength() (14.4 MB, against 14.0); pieceFrom() asked at every character (the characters 36.2 MB,
+against 34.5); charIn() written into at(), its piece asked again in each arm (35.8); the numbers'
+characters asked of floatAt() and integerAt() from charIn() itself, skipping valueAt()'s Piece
+argument (46.2: the larger function cost every character); a character read through a remembered
+charAt(text, i) (35.1, against 34.4); the characters in three functions, prefix, value, rest (32.8,
+against 31.7); SHA-256's round constants as eight functions of eight (no change); the macro's JSON
+copied from Json<>::value rather than through Stored::json() (0.3 MB less: left out).
+
 ## Before issue 32 (a5c2de9, avr-g++, the same script)
 
 | channels | description | JSON bytes | avr-g++ |

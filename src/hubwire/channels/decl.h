@@ -207,27 +207,38 @@ class Decl {
         call_(call), thunk_(thunk), code_(code), count_(count), ret_(ret), access_(access),
         flags_(0), mistake_(validName(name) ? kNoMistake : kBadName), lo_(), hi_(), failsafe_() {}
 
-  // The k-th piece of this channel's JSON, as channel id.
+  // The k-th piece of this channel's JSON, as channel id: four functions of four pieces each, not
+  // one of sixteen (avr-g++ 5.4 paid about 20 KB for each piece it worked out from the one large
+  // function, 8 from these: 32 channels with 60-character descriptions 167 MiB, then 161).
   constexpr Piece piece(uint8_t k, uint8_t id) const {
+    return k < 8 ? (k < 4 ? pieces0to3(k, id) : pieces4to7(k)) : (k < 12 ? pieces8to11(k) : pieces12to15(k));
+  }
+  constexpr Piece pieces0to3(uint8_t k, uint8_t id) const {
     return k == 0 ? integer(id > 1 ? ",{\"id\":" : "{\"id\":", id)
          : k == 1 ? quoted(",\"n\":\"", name_)
          : k == 2 ? Piece{",\"a\":\"", kAccessLetters, access_, 0, "", "\""}
-         : k == 3 ? typeNamed(",\"t\":\"", elementOf(code_))
-         : k == 4 ? (count_ ? integer(isListCode(code_) ? ",\"vc\":" : ",\"c\":", count_) : empty())
+                  : typeNamed(",\"t\":\"", elementOf(code_));
+  }
+  constexpr Piece pieces4to7(uint8_t k) const {
+    return k == 4 ? (count_ ? integer(isListCode(code_) ? ",\"vc\":" : ",\"c\":", count_) : empty())
          : k == 5 ? (layout_ ? Piece{",\"f\":[", kFields, 0, 0, layout_, "]"} : empty())
          : k == 6 ? (ret_ != kVoid ? typeNamed(",\"rt\":\"", elementOf(ret_)) : empty())
-         : k == 7 ? (progress_ != kVoid ? typeNamed(",\"pt\":\"", progress_) : empty())
-         : k == 8 ? (flags_ & kHasProgressMax ? number(",\"pmax\":", progressMax_) : empty())
+                  : (progress_ != kVoid ? typeNamed(",\"pt\":\"", progress_) : empty());
+  }
+  constexpr Piece pieces8to11(uint8_t k) const {
+    return k == 8 ? (flags_ & kHasProgressMax ? number(",\"pmax\":", progressMax_) : empty())
          : k == 9 ? (unit_ ? quoted(",\"u\":\"", unit_) : empty())
          : k == 10 ? (flags_ & kHasRange ? number(",\"min\":", lo_) : empty())
-         : k == 11 ? (flags_ & kHasRange ? number(",\"max\":", hi_) : empty())
-         : k == 12 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
+                   : (flags_ & kHasRange ? number(",\"max\":", hi_) : empty());
+  }
+  constexpr Piece pieces12to15(uint8_t k) const {
+    return k == 12 ? (flags_ & kHasFailsafe ? number(",\"fs\":", failsafe_) : empty())
          : k == 13 ? (description_ ? quoted(",\"d\":\"", description_) : empty())
          : k == 14 ? (retCount_ ? integer(",\"rvc\":", retCount_) : empty())
                    : literal("}");  // k == 15
   }
   // Where piece k starts in the entry (k = kPiecesPerChannel: the entry's length), each k worked
-  // out once (descriptor_text.h finds a character's piece by a binary search over them).
+  // out once (descriptor_text.h finds a character's piece from them).
   constexpr size_t pieceStart(uint8_t id, uint8_t k) const {
     return k == 0 ? 0 : pieceStart(id, (uint8_t)(k - 1)) + pieceLength(piece((uint8_t)(k - 1), id));
   }

@@ -53,8 +53,11 @@ struct Parts {
   }
 #if HUBWIRE_CX_REMEMBERS  // (g++ 12 pays more for the blocks than for the words)
   static constexpr sha256::detail::Block block(size_t i) {  // one descent a block where it lies in one half
-    return i + 64 <= A::length() ? A::block(i) : i >= A::length() ? B::block(i - A::length()) : HUBWIRE_BLOCK_OF_WORDS;
+    return i + 64 <= A::length() ? A::block(i) : i >= A::length() ? B::block(i - A::length()) : across(i);
   }
+  // A block across the halves, apart: avr-g++ 5.4 paid for its sixteen words at every level of
+  // every block's descent, where they are not read.
+  static constexpr sha256::detail::Block across(size_t i) { return HUBWIRE_BLOCK_OF_WORDS; }
 #endif
 };
 #undef HUBWIRE_PAIR_AT

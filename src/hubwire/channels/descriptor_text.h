@@ -90,28 +90,36 @@ struct ChannelPart {
   // The value's text itself where it is written as it is (a name, unit or description without
   // escapes, a type name), else nullptr.
   static constexpr const char* plain(uint8_t k) {
-    return piece(k).kind == kLiteral || (piece(k).kind == kEscaped && cx::escapedLength(piece(k).text) == cx::length(piece(k).text))
+    return piece(k).kind == kLiteral || (piece(k).kind == kEscaped && cx::plainLength(piece(k).text) != cx::kNotPlain)
                ? piece(k).text
                : nullptr;
   }
   static constexpr size_t length() { return start(kPiecesPerChannel); }
-  static constexpr char charOf(uint8_t k, size_t j) {  // j-th character of piece k
-    return j < preLength(k)   ? pre(k)[j]
-         : j >= valueEnd(k)   ? post(k)[j - valueEnd(k)]
-         : plain(k)           ? plain(k)[j - preLength(k)]
-                              : declare::valueAt(piece(k), j - preLength(k));
+  // Where piece k's value and suffix start in the entry, and character i of the entry, in piece k:
+  // asked with i itself, not with its offset in the piece (one call and one start() less a
+  // character). The prefix and a value written as it is (most characters) in a small function, the
+  // rest in another: avr-g++ 5.4 paid for the rarer cases' arms at every character.
+  static constexpr size_t valueStart(uint8_t k) { return start(k) + preLength(k); }
+  static constexpr size_t postStart(uint8_t k) { return start(k) + valueEnd(k); }
+  static constexpr char charIn(uint8_t k, size_t i) {
+    return i < valueStart(k) ? pre(k)[i - start(k)] : i < postStart(k) && plain(k) ? plain(k)[i - valueStart(k)] : restIn(k, i);
   }
-  // The piece holding character i, the last one starting at or before it, in one call: a binary
-  // search written out as nested conditionals, so that four remembered start(k) are asked.
-  static_assert(kPiecesPerChannel == 16, "pieceOf() searches the starts of pieces 1..15");
+  static constexpr char restIn(uint8_t k, size_t i) {
+    return i >= postStart(k) ? post(k)[i - postStart(k)] : declare::valueAt(piece(k), i - valueStart(k));
+  }
+  // The piece holding character i. Chars::make() asks the characters in order, so character i - 1's
+  // is remembered: most characters lie in the same piece (one start() asked), the others in the
+  // first piece after it that ends after i (pieces may be empty). A binary search over the sixteen
+  // starts, one function, cost avr-g++ 5.4 2.8 KB a character; this 1.8.
+  static constexpr uint8_t pieceFrom(uint8_t k, size_t i) {
+    return i < start((uint8_t)(k + 1)) ? k : pieceFrom((uint8_t)(k + 1), i);
+  }
   static constexpr uint8_t pieceOf(size_t i) {
-    return i < start(8)
-               ? (i < start(4) ? (i < start(2) ? (i < start(1) ? 0 : 1) : (i < start(3) ? 2 : 3))
-                               : (i < start(6) ? (i < start(5) ? 4 : 5) : (i < start(7) ? 6 : 7)))
-               : (i < start(12) ? (i < start(10) ? (i < start(9) ? 8 : 9) : (i < start(11) ? 10 : 11))
-                                : (i < start(14) ? (i < start(13) ? 12 : 13) : (i < start(15) ? 14 : 15)));
+    return i == 0 ? pieceFrom(0, 0)
+         : i < start((uint8_t)(pieceOf(i - 1) + 1)) ? pieceOf(i - 1)
+                                                    : pieceFrom((uint8_t)(pieceOf(i - 1) + 1), i);
   }
-  static constexpr char at(size_t i) { return charOf(pieceOf(i), i - start(pieceOf(i))); }
+  static constexpr char at(size_t i) { return charIn(pieceOf(i), i); }
 };
 #else
 // Where calls are not remembered (GCC from 10 on, clang: constexpr_text.h), piece K of channel
@@ -311,14 +319,18 @@ constexpr JsonText<D, Decls> TextConst<D, Decls>::value;
 #else
 #define HUBWIRE_FNV(h, i) (((h) ^ (uint32_t)(uint8_t)partChar<P>(i)) * 0x01000193UL)
 #endif
+// The last characters, fewer than eight, apart: avr-g++ 5.4 paid for this arm at every call.
+template <typename P>
+constexpr uint32_t fnvTail(uint32_t h, size_t i) {
+  return i < sizeof(Chars<P>) ? fnvTail<P>(HUBWIRE_FNV(h, i), i + 1) : h;
+}
 template <typename P>
 constexpr uint32_t fnvPart(uint32_t h, size_t i = 0) {
   return i + 8 <= sizeof(Chars<P>)
              ? fnvPart<P>(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(HUBWIRE_FNV(
                               h, i), i + 1), i + 2), i + 3), i + 4), i + 5), i + 6), i + 7),
                           i + 8)
-         : i < sizeof(Chars<P>) ? fnvPart<P>(HUBWIRE_FNV(h, i), i + 1)
-                                : h;
+                                : fnvTail<P>(h, i);
 }
 #undef HUBWIRE_FNV
 template <typename D, const D* Decls, size_t K>
