@@ -206,7 +206,7 @@ PY
   echo
   echo "The same flags with \`-Q\` print the heap before and after each collection and the functions"
   echo "compiled between, so the heap each step of HUBWIRE_CHANNELS allocates (steps.h) can be added up."
-  echo "32 x 60, MB allocated (mostly garbage: collected, it leaves the 55 MiB above): $steps."
+  echo "32 x 60, MB allocated (mostly garbage, which the eager collection above frees): $steps."
   cat <<'MD'
 
 ## Before this change (41b85b1, the same script)

@@ -47,10 +47,10 @@
 
 // Highest channel id, 1..254 (channels are numbered 1..N in declaration order). The compiler builds
 // the descriptor, its hash and digest and the channel tables: a sketch of 32 float channels with a
-// range, a unit and 60-character descriptions (4.3 KB of JSON) takes avr-gcc 5.4 about 170 MiB and
-// 0.6 s of CPU for the Uno, g++ 12 (the emulator; boards of a modern GCC alike) 140 MiB and 0.8 s
+// range, a unit and 60-character descriptions (4.3 KB of JSON) takes avr-gcc 5.4 147 MiB and
+// 0.5 s of CPU for the Uno, g++ 12 (the emulator; boards of a modern GCC alike) 140 MiB and 0.8 s
 // (make test-compile-cost checks both fit 256 MiB); 80 such channels about 300 and 270 MiB, 254
-// plain ones 380 and 420 MiB. A descriptor over the 16 KiB a hub accepts is refused before it is
+// plain ones 320 and 410 MiB. A descriptor over the 16 KiB a hub accepts is refused before it is
 // built, in well under a second (bench/DESCRIPTOR-COMPILE.md).
 #ifndef HUBWIRE_MAX_CHANNELS
 #define HUBWIRE_MAX_CHANNELS 32
