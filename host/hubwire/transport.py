@@ -54,9 +54,6 @@ class Transport(abc.ABC):
     def close(self) -> None:
         """Close the pipe (idempotent); no callback is made after it returns."""
 
-    def drain(self) -> None:
-        """On the loop thread: hand what has already arrived to ``on_data`` now, without waiting
-        (a loss check held up by a long callback looks at the port before it calls the link lost)."""
 
     @property
     def is_open(self) -> bool:
@@ -130,17 +127,6 @@ class SerialTransport(Transport):
             self._failed(OSError(errno.EIO, "end of file: the device went away"))
             return
         self._on_data(data)  # type: ignore[misc]
-
-    def drain(self) -> None:
-        if self._fd is None or self._port is None:
-            return  # closed, or a reader thread hands bytes to the loop as they come
-        if not self._raw_fd:
-            try:
-                if not self._port.in_waiting:
-                    return
-            except (OSError, serial.SerialException, AttributeError, TypeError):
-                return
-        self._readable()  # a non-blocking read: nothing waiting is a BlockingIOError, ignored
 
     def write(self, data: bytes) -> None:
         with self._wlock:

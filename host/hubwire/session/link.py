@@ -291,11 +291,6 @@ class Link:
         silent = time.monotonic() - self.last_rx
         limit = self._loss_after()
         if silent > limit:
-            self.transport.drain()  # held up by a long callback: what waits in the port is not silence
-            if self._loss_timer is not None or not self.linked or self.closed:
-                return  # what it read settled the link (a hello, a reboot)
-            silent = time.monotonic() - self.last_rx
-        if silent > limit:
             self.owner.link_down(f"nothing heard for {silent * 1000:.0f} ms")
             return
         due = PROBE_AFTER * beat

@@ -23,8 +23,6 @@ class PtyPeer:
         self.max_payload = max_payload
         self.beat_ms = beat_ms
         self.linked = False
-        #: heartbeats sent
-        self.beats = 0
         #: a cut line: nothing is sent, everything received is lost
         self.mute = False
         self.master, self.slave = os.openpty()
@@ -83,5 +81,4 @@ class PtyPeer:
             if self.linked and time.monotonic() - beat >= self.beat_ms / 1000:
                 n += 1
                 self.send(m.HEARTBEAT, n & 0xFF, 0, m.Heartbeat(n, 0 if n == 1 else self.beat_ms, 0, 0, 0).pack())
-                self.beats = n
                 beat = time.monotonic()
